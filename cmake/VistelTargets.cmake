@@ -1,0 +1,62 @@
+# Helpers that give every vistel target the same standards.
+
+# Warnings as errors on our own targets only (third-party headers come in as SYSTEM).
+function(vistel_warnings target)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow -Werror)
+  target_compile_definitions(${target} PUBLIC GLM_ENABLE_EXPERIMENTAL)
+endfunction()
+
+# vistel_library(NAME [RUNTIME] [DEPS ...] [PRIVATE_DEPS ...]): a static library from
+# every .cpp in the calling folder (one concept per file; adding a file needs no edit
+# here). RUNTIME adds it to vistel_core, the set every runtime program links.
+function(vistel_library name)
+  cmake_parse_arguments(ARG "RUNTIME" "" "DEPS;PRIVATE_DEPS" ${ARGN})
+  file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cpp)
+  file(GLOB headers CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.hpp)
+  add_library(${name} STATIC ${sources} ${headers})
+  target_include_directories(${name} PUBLIC ${PROJECT_SOURCE_DIR} ${PROJECT_BINARY_DIR})
+  target_link_libraries(${name} PUBLIC ${ARG_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
+  vistel_warnings(${name})
+  if(ARG_RUNTIME)
+    set_property(GLOBAL APPEND PROPERTY VISTEL_RUNTIME_LAYERS ${name})
+  endif()
+endfunction()
+
+# vistel_program(NAME SOURCES... DEPS ...): an executable of ours.
+function(vistel_program name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE ${ARG_DEPS})
+  vistel_warnings(${name})
+endfunction()
+
+# vistel_test(NAME [DEPS ...] [LABELS ...] [PROPERTIES ...]): one GoogleTest binary from
+# every .cpp in the calling folder, registered with ctest test by test. Label "unit"
+# tests also run under ASan+UBSan in scripts/test.
+function(vistel_test name)
+  cmake_parse_arguments(ARG "" "" "DEPS;LABELS;PROPERTIES" ${ARGN})
+  file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cpp)
+  if(NOT sources)
+    return()
+  endif()
+  add_executable(${name} ${sources})
+  target_link_libraries(${name} PRIVATE ${ARG_DEPS} vistel_testsupport GTest::gtest GTest::gtest_main)
+  vistel_warnings(${name})
+  if(NOT ARG_LABELS)
+    set(ARG_LABELS unit)
+  endif()
+  gtest_discover_tests(${name}
+    WORKING_DIRECTORY ${PROJECT_SOURCE_DIR}
+    PROPERTIES LABELS "${ARG_LABELS}" ${ARG_PROPERTIES}
+    DISCOVERY_TIMEOUT 120)
+endfunction()
+
+# Adds every immediate subfolder of the calling folder that has a CMakeLists.txt.
+function(vistel_add_subfolders)
+  file(GLOB children LIST_DIRECTORIES true ${CMAKE_CURRENT_SOURCE_DIR}/*)
+  foreach(child ${children})
+    if(IS_DIRECTORY ${child} AND EXISTS ${child}/CMakeLists.txt)
+      add_subdirectory(${child})
+    endif()
+  endforeach()
+endfunction()
