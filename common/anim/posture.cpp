@@ -15,10 +15,16 @@ Posture restPosture(const Skeleton& s) {
 void poseSkeleton(const Skeleton& s, const Posture& posture, std::span<glm::mat4> out_model) {
   const std::size_t n = s.names.size();
   assert(out_model.size() == n && posture.rotations.size() == n);
+  assert(posture.translations.empty() || posture.translations.size() == n);
+  const bool translated = !posture.translations.empty();
   for (std::size_t j = 0; j < n; ++j) {
     Transform local = s.rest_local[j];
     local.rotation = posture.rotations[j];
-    if (j == 0) local.translation = posture.root_translation;
+    if (j == 0) {
+      local.translation = posture.root_translation;
+    } else if (translated) {
+      local.translation = posture.translations[j];
+    }
     const glm::mat4 m = local.matrix();
     out_model[j] = j == 0 ? m : out_model[static_cast<std::size_t>(s.parents[j])] * m;
   }
@@ -37,6 +43,11 @@ void blendPostures(const Posture& a, const Posture& b, float t, Posture& out) {
   out.rotations.resize(a.rotations.size());
   for (std::size_t j = 0; j < a.rotations.size(); ++j) {
     out.rotations[j] = glm::slerp(a.rotations[j], b.rotations[j], t);
+  }
+  out.translations.resize(a.translations.size() == b.translations.size() ? a.translations.size()
+                                                                         : 0);
+  for (std::size_t j = 0; j < out.translations.size(); ++j) {
+    out.translations[j] = glm::mix(a.translations[j], b.translations[j], t);
   }
 }
 

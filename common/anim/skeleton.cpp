@@ -37,8 +37,8 @@ Status validateSkeleton(const Skeleton& s) {
   const std::size_t n = s.names.size();
   if (n == 0) return fail("skeleton has no joints");
   if (s.parents.size() != n || s.rest_local.size() != n || s.inverse_bind.size() != n) {
-    return fail("skeleton arrays disagree: {} names, {} parents, {} rest transforms, {} bind",
-                n, s.parents.size(), s.rest_local.size(), s.inverse_bind.size());
+    return fail("skeleton arrays disagree: {} names, {} parents, {} rest transforms, {} bind", n,
+                s.parents.size(), s.rest_local.size(), s.inverse_bind.size());
   }
   if (s.parents[0] != kNoParent) return fail("joint 0 '{}' must be the root", s.names[0]);
   std::unordered_set<std::string> seen;
@@ -49,7 +49,8 @@ Status validateSkeleton(const Skeleton& s) {
       return fail("joint {} '{}' has parent {}, which does not precede it", j, s.names[j],
                   s.parents[j]);
     }
-    if (!finite(s.rest_local[j])) return fail("joint '{}' has a non-finite rest transform", s.names[j]);
+    if (!finite(s.rest_local[j]))
+      return fail("joint '{}' has a non-finite rest transform", s.names[j]);
   }
   return {};
 }
@@ -58,7 +59,8 @@ std::vector<glm::mat4> restModelTransforms(const Skeleton& s) {
   std::vector<glm::mat4> model(s.names.size());
   for (std::size_t j = 0; j < model.size(); ++j) {
     const glm::mat4 local = s.rest_local[j].matrix();
-    model[j] = s.parents[j] == kNoParent ? local : model[static_cast<std::size_t>(s.parents[j])] * local;
+    model[j] =
+        s.parents[j] == kNoParent ? local : model[static_cast<std::size_t>(s.parents[j])] * local;
   }
   return model;
 }

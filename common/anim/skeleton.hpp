@@ -16,11 +16,11 @@ namespace vistel {
 inline constexpr int kNoParent = -1;
 
 struct Skeleton {
-  std::vector<std::string> names;      // joint name (njoint), unique
-  std::vector<int> parents;            // parent joint (njoint); joint 0 is the single root
-                                       // (kNoParent) and parents[j] < j for every other j
-  std::vector<Transform> rest_local;   // rest transform relative to the parent (njoint);
-                                       // the root's is relative to model space
+  std::vector<std::string> names;       // joint name (njoint), unique
+  std::vector<int> parents;             // parent joint (njoint); joint 0 is the single root
+                                        // (kNoParent) and parents[j] < j for every other j
+  std::vector<Transform> rest_local;    // rest transform relative to the parent (njoint);
+                                        // the root's is relative to model space
   std::vector<glm::mat4> inverse_bind;  // model space -> joint space in the bind (= rest)
                                         // posture (njoint)
 

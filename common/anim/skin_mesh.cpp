@@ -23,7 +23,8 @@ Status validateSkinMesh(const SkinMesh& m, int joint_count) {
     return fail("skin arrays disagree: {} positions, {} normals, {} joint slots, {} weights", n,
                 m.normals.size(), m.joints.size(), m.weights.size());
   }
-  if (m.indices.size() % 3 != 0) return fail("skin index count {} is not a multiple of 3", m.indices.size());
+  if (m.indices.size() % 3 != 0)
+    return fail("skin index count {} is not a multiple of 3", m.indices.size());
   for (std::size_t i = 0; i < m.indices.size(); ++i) {
     if (m.indices[i] >= n) {
       return fail("triangle {} refers to vertex {} of {}", i / 3, m.indices[i], n);

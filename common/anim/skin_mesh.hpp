@@ -16,13 +16,13 @@ namespace vistel {
 inline constexpr int kMaxInfluences = 8;
 
 struct SkinMesh {
-  std::vector<glm::vec3> positions;     // rest position per vertex (nvert), metres
-  std::vector<glm::vec3> normals;       // rest unit normal per vertex (nvert)
-  std::vector<std::uint32_t> indices;   // triangles, counter-clockwise outward (3 * ntri)
-  int influences = 4;                   // influence slots per vertex (k), 1..kMaxInfluences
-  std::vector<std::uint16_t> joints;    // joint per slot (nvert * k)
-  std::vector<float> weights;           // weight per slot (nvert * k), each vertex sums to 1;
-                                        // unused slots have weight 0
+  std::vector<glm::vec3> positions;    // rest position per vertex (nvert), metres
+  std::vector<glm::vec3> normals;      // rest unit normal per vertex (nvert)
+  std::vector<std::uint32_t> indices;  // triangles, counter-clockwise outward (3 * ntri)
+  int influences = 4;                  // influence slots per vertex (k), 1..kMaxInfluences
+  std::vector<std::uint16_t> joints;   // joint per slot (nvert * k)
+  std::vector<float> weights;          // weight per slot (nvert * k), each vertex sums to 1;
+                                       // unused slots have weight 0
 
   int vertexCount() const { return static_cast<int>(positions.size()); }
   int triangleCount() const { return static_cast<int>(indices.size() / 3); }

@@ -22,9 +22,7 @@ glm::vec3 DualQuat::translation() const {
   return {t.x, t.y, t.z};
 }
 
-glm::vec3 DualQuat::transformPoint(const glm::vec3& p) const {
-  return real * p + translation();
-}
+glm::vec3 DualQuat::transformPoint(const glm::vec3& p) const { return real * p + translation(); }
 
 glm::vec3 DualQuat::transformVector(const glm::vec3& v) const { return real * v; }
 

@@ -3,8 +3,8 @@
 #include <numbers>
 #include <vector>
 
-#include <glm/gtc/quaternion.hpp>
 #include <gtest/gtest.h>
+#include <glm/gtc/quaternion.hpp>
 
 #include "common/anim/posture.hpp"
 #include "common/anim/skinning.hpp"
@@ -41,12 +41,15 @@ Arm makeArm(float length = 0.3f, float radius = 0.04f, float blend = 0.06f, int 
   for (int i = 0; i <= rings; ++i) {
     const float x = 2.0f * length * static_cast<float>(i) / static_cast<float>(rings);
     for (int k = 0; k < sides; ++k) {
-      const float a = 2.0f * std::numbers::pi_v<float> * static_cast<float>(k) / static_cast<float>(sides);
+      const float a =
+          2.0f * std::numbers::pi_v<float> * static_cast<float>(k) / static_cast<float>(sides);
       const glm::vec3 n(0.0f, std::cos(a), std::sin(a));
       add_vertex(glm::vec3(x, 0.0f, 0.0f) + radius * n, n);
     }
   }
-  const auto ring = [&](int i, int k) { return static_cast<std::uint32_t>(i * sides + (k % sides)); };
+  const auto ring = [&](int i, int k) {
+    return static_cast<std::uint32_t>(i * sides + (k % sides));
+  };
   for (int i = 0; i < rings; ++i) {
     for (int k = 0; k < sides; ++k) {
       m.indices.insert(m.indices.end(), {ring(i, k), ring(i, k + 1), ring(i + 1, k + 1)});

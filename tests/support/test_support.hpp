@@ -22,9 +22,9 @@ std::string scratchDir();
 }  // namespace vistel::test
 
 // Skips the current test, naming the missing file, when a shared-data file is absent.
-#define VISTEL_REQUIRE_SHARED(path_var, relative)                                         \
-  const std::string path_var = ::vistel::test::sharedDataPath(relative);                 \
-  if (!std::ifstream(path_var).good()) {                                                  \
-    GTEST_SKIP() << "shared test data not found: " << path_var                            \
-                 << " (set VISTEL_SHARED_DATA or place shared/ beside the checkout)";     \
+#define VISTEL_REQUIRE_SHARED(path_var, relative)                                     \
+  const std::string path_var = ::vistel::test::sharedDataPath(relative);              \
+  if (!std::ifstream(path_var).good()) {                                              \
+    GTEST_SKIP() << "shared test data not found: " << path_var                        \
+                 << " (set VISTEL_SHARED_DATA or place shared/ beside the checkout)"; \
   }

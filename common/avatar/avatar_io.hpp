@@ -1,0 +1,32 @@
+// The .vavatar file: an AvatarModel saved by vistel and loaded back bit-identically.
+//
+// Layout (little-endian): "VAVATAR\0", u32 format version, u32 chunk count, then chunks
+// of { char tag[4], u32 payload size, payload, u32 CRC-32 of the payload }. Chunks:
+// "META" (name), "SKEL" (skeleton), "SKIN" (skin mesh); later issues add chunks for the
+// deformable component. Loading validates every size, index and checksum and the
+// decoded model (validateAvatar); errors name the file, the chunk and the reason.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "common/avatar/avatar_model.hpp"
+#include "common/base/result.hpp"
+
+namespace vistel {
+
+inline constexpr std::uint32_t kAvatarFormatVersion = 1;
+
+std::vector<std::uint8_t> encodeAvatar(const AvatarModel& avatar);
+Result<AvatarModel> decodeAvatar(std::span<const std::uint8_t> bytes, std::string_view source_name);
+
+Status saveAvatar(const AvatarModel& avatar, const std::string& path);
+Result<AvatarModel> loadAvatar(const std::string& path);
+
+// Content hash of an encoded avatar (hex SHA-256), how avatars travel between sites.
+std::string avatarContentHash(std::span<const std::uint8_t> encoded);
+
+}  // namespace vistel
