@@ -30,11 +30,12 @@ function(vistel_program name)
   vistel_warnings(${name})
 endfunction()
 
-# vistel_test(NAME [DEPS ...] [LABELS ...] [PROPERTIES ...]): one GoogleTest binary from
-# every .cpp in the calling folder, registered with ctest test by test. Label "unit"
-# tests also run under ASan+UBSan in scripts/test.
+# vistel_test(NAME [SINGLE] [DEPS ...] [LABELS ...] [PROPERTIES ...]): one GoogleTest
+# binary from every .cpp in the calling folder, registered with ctest test by test, or
+# as one ctest test when SINGLE (for suites whose shared fixture is expensive to build
+# once per process). Label "unit" tests also run under ASan+UBSan in scripts/test.
 function(vistel_test name)
-  cmake_parse_arguments(ARG "" "" "DEPS;LABELS;PROPERTIES" ${ARGN})
+  cmake_parse_arguments(ARG "SINGLE" "" "DEPS;LABELS;PROPERTIES" ${ARGN})
   file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cpp)
   if(NOT sources)
     return()
@@ -45,10 +46,15 @@ function(vistel_test name)
   if(NOT ARG_LABELS)
     set(ARG_LABELS unit)
   endif()
-  gtest_discover_tests(${name}
-    WORKING_DIRECTORY ${PROJECT_SOURCE_DIR}
-    PROPERTIES LABELS "${ARG_LABELS}" ${ARG_PROPERTIES}
-    DISCOVERY_TIMEOUT 120)
+  if(ARG_SINGLE)
+    add_test(NAME ${name} COMMAND ${name} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+    set_tests_properties(${name} PROPERTIES LABELS "${ARG_LABELS}" ${ARG_PROPERTIES})
+  else()
+    gtest_discover_tests(${name}
+      WORKING_DIRECTORY ${PROJECT_SOURCE_DIR}
+      PROPERTIES LABELS "${ARG_LABELS}" ${ARG_PROPERTIES}
+      DISCOVERY_TIMEOUT 120)
+  endif()
 endfunction()
 
 # Adds every immediate subfolder of the calling folder that has a CMakeLists.txt.
