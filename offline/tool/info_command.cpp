@@ -1,0 +1,85 @@
+// vistel-avatar info FILE [--json]: counts, joints, influences and bounds of an avatar.
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "offline/tool/tool_commands.hpp"
+
+namespace vistel {
+namespace {
+
+struct InfoOptions {
+  std::string file;
+  bool json = false;
+};
+
+Status runInfo(const InfoOptions& opt) {
+  std::vector<std::string> warnings;
+  Result<AvatarModel> loaded = loadAvatarFile(opt.file, &warnings);
+  if (!loaded) return loaded.error();
+  const AvatarModel& avatar = *loaded;
+  const Skeleton& skel = avatar.skeleton;
+  const SkinMesh& skin = avatar.skin;
+  const Bounds box = computeBounds(skin.positions);
+  const glm::vec3 size = box.max - box.min;
+
+  // One JSON object on stdout.
+  if (opt.json) {
+    nlohmann::json out = {{"file", opt.file},
+                          {"name", avatar.name},
+                          {"vertices", skin.vertexCount()},
+                          {"triangles", skin.triangleCount()},
+                          {"joints", skel.names},
+                          {"parents", skel.parents},
+                          {"max_influences", maxInfluencesUsed(skin)},
+                          {"influence_slots", skin.influences},
+                          {"bbox_min", {box.min.x, box.min.y, box.min.z}},
+                          {"bbox_max", {box.max.x, box.max.y, box.max.z}},
+                          {"size", {size.x, size.y, size.z}},
+                          {"warnings", warnings}};
+    std::cout << out.dump() << std::endl;
+    return {};
+  }
+
+  // Text: a summary, then the joints with their parents.
+  fmt::print("file:            {}\n", opt.file);
+  fmt::print("name:            {}\n", avatar.name);
+  fmt::print("vertices:        {}\n", skin.vertexCount());
+  fmt::print("triangles:       {}\n", skin.triangleCount());
+  fmt::print("joints:          {}\n", skel.jointCount());
+  fmt::print("max influences:  {} per vertex ({} slots)\n", maxInfluencesUsed(skin),
+             skin.influences);
+  fmt::print("bbox min:        {:.4f} {:.4f} {:.4f} m\n", box.min.x, box.min.y, box.min.z);
+  fmt::print("bbox max:        {:.4f} {:.4f} {:.4f} m\n", box.max.x, box.max.y, box.max.z);
+  fmt::print("size:            {:.4f} x {:.4f} x {:.4f} m\n", size.x, size.y, size.z);
+  fmt::print("joint hierarchy (index name <- parent):\n");
+  for (int j = 0; j < skel.jointCount(); ++j) {
+    const int p = skel.parents[static_cast<std::size_t>(j)];
+    fmt::print("  {:3} {} <- {}\n", j, skel.names[static_cast<std::size_t>(j)],
+               p == kNoParent ? std::string("(root)") : skel.names[static_cast<std::size_t>(p)]);
+  }
+  if (!warnings.empty()) {
+    fmt::print("warnings:\n");
+    for (const std::string& w : warnings) fmt::print("  {}\n", w);
+  }
+  std::fflush(stdout);
+  return {};
+}
+
+}  // namespace
+
+void registerInfoCommand(CLI::App& app) {
+  auto opt = std::make_shared<InfoOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "info",
+      "Print vertices, triangles, joints (names, parents), maximum influences per vertex "
+      "and the bounding box (metres) of an avatar (.glb, .gltf or .vavatar)");
+  cmd->add_option("file", opt->file, "avatar file (.glb, .gltf or .vavatar)")->required();
+  cmd->add_flag("--json", opt->json, "print one JSON object instead of text");
+  setCommandAction(cmd, [opt]() { return runInfo(*opt); });
+}
+
+}  // namespace vistel

@@ -1,0 +1,27 @@
+// vistel-avatar: inspect, pose, build and export avatars (offline).
+//
+// Subcommands are registered from their own files (see tool_commands.hpp); adding one is
+// a new <name>_command.cpp and one line below.
+#include <exception>
+#include <iostream>
+
+#include <CLI/CLI.hpp>
+
+#include "offline/tool/tool_commands.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"vistel-avatar: inspect, pose, build and export vistel avatars"};
+  app.require_subcommand(1);
+  vistel::registerInfoCommand(app);
+  vistel::registerPoseCommand(app);
+  vistel::registerDefaultCommand(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const std::exception& e) {
+    std::cerr << "vistel-avatar: error: " << e.what() << std::endl;
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,34 @@
+// The subcommands of vistel-avatar and what they share. Each subcommand lives in its own
+// <name>_command.cpp with a register function declared here and called from main.cpp.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "common/avatar/avatar_model.hpp"
+#include "common/base/result.hpp"
+
+namespace vistel {
+
+// vistel-avatar info FILE [--json]
+void registerInfoCommand(CLI::App& app);
+// vistel-avatar pose FILE (--bvh CLIP --frame K | --rest) [--skinning lbs|dqs] --out OUT.glb
+void registerPoseCommand(CLI::App& app);
+// vistel-avatar default --out OUT.glb|OUT.vavatar
+void registerDefaultCommand(CLI::App& app);
+
+// Runs `body` as the subcommand's action: an Error (or an escaped exception) is printed
+// to stderr as "vistel-avatar <command>: error: <message>" and makes the program exit with
+// status 1 (through CLI::RuntimeError, which main() turns into the exit status).
+void setCommandAction(CLI::App* command, std::function<Status()> body);
+
+// Loads an avatar from a .glb/.gltf (glTF import) or .vavatar file, chosen by the file's
+// first bytes (the extension when they do not tell). Import warnings are appended to
+// `warnings` when it is given.
+Result<AvatarModel> loadAvatarFile(const std::string& path,
+                                   std::vector<std::string>* warnings = nullptr);
+
+}  // namespace vistel
