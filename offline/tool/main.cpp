@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   vistel::registerInfoCommand(app);
   vistel::registerPoseCommand(app);
   vistel::registerDefaultCommand(app);
+  vistel::registerGesturesCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -19,6 +19,7 @@ void registerInfoCommand(CLI::App& app);
 void registerPoseCommand(CLI::App& app);
 // vistel-avatar default --out OUT.glb|OUT.vavatar
 void registerDefaultCommand(CLI::App& app);
+void registerGesturesCommand(CLI::App& app);
 
 // Runs `body` as the subcommand's action: an Error (or an escaped exception) is printed
 // to stderr as "vistel-avatar <command>: error: <message>" and makes the program exit with
