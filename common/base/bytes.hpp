@@ -78,6 +78,7 @@ class ByteReader {
       ok_ = false;
       return false;
     }
+    if (size == 0) return true;  // out may be null (an empty vector's data())
     std::memcpy(out, in_.data() + pos_, size);
     pos_ += size;
     return true;

@@ -56,6 +56,16 @@ TEST(Bytes, ReadsPastTheEndFailAndLatch) {
   EXPECT_TRUE(floats.empty());
 }
 
+TEST(Bytes, EmptyArraysReadWithoutTouchingMemory) {
+  std::vector<std::uint8_t> buf = {9};
+  ByteReader r(buf);
+  std::vector<float> none;
+  EXPECT_TRUE(r.array(none, 0));  // data() of an empty vector is null: must not memcpy
+  EXPECT_TRUE(none.empty());
+  EXPECT_EQ(r.u8(), 9);
+  EXPECT_TRUE(r.ok());
+}
+
 TEST(Embedded, UnknownConfigIsAClearError) {
   auto text = readConfigText("config/does/not/exist.toml");
   ASSERT_FALSE(text.ok());

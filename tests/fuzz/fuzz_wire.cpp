@@ -1,0 +1,217 @@
+// libFuzzer target: the wire decoders (common/wire, proto/WIRE.md) on arbitrary bytes.
+// Each input is read two ways:
+//   - as one UDP datagram, by every reader: an accepted datagram writes back to exactly
+//     the same bytes, measure() agrees, peekPacketType / peekMemberId agree with it, and
+//     its posture records decode to finite unit rotations;
+//   - as a TCP byte stream cut into pieces (fuzz::feedInChunks): FrameDecoder returns
+//     exactly the frames a one-pass reading of the whole stream finds, breaks exactly when
+//     that reading meets an oversized length, and keeps the rest buffered.
+// Seeds: datagrams of every type and framed streams written by the codec itself.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "common/anim/posture.hpp"
+#include "common/wire/framing.hpp"
+#include "common/wire/packets.hpp"
+#include "common/wire/posture_codec.hpp"
+#include "tests/fuzz/fuzz_support.hpp"
+
+namespace {
+
+using namespace vistel;
+using namespace vistel::wire;
+using fuzz::check;
+
+constexpr std::size_t kMaxFrame = 256;  // FrameDecoder's limit in this target
+
+// The frames of a TCP stream read in one pass: the reference FrameDecoder must agree with.
+struct Framing {
+  std::vector<std::vector<std::uint8_t>> frames;
+  bool broken = false;
+  std::size_t rest = 0;  // bytes after the last frame (when not broken)
+};
+
+Framing frameAtOnce(std::span<const std::uint8_t> stream) {
+  Framing f;
+  std::size_t at = 0;
+  while (stream.size() - at >= kFrameHeaderBytes) {
+    const std::uint32_t n = fuzz::loadU32(stream.data() + at);
+    if (n > kMaxFrame) {
+      f.broken = true;
+      return f;
+    }
+    if (stream.size() - at - kFrameHeaderBytes < n) break;
+    const auto payload = stream.subspan(at + kFrameHeaderBytes, n);
+    f.frames.emplace_back(payload.begin(), payload.end());
+    at += kFrameHeaderBytes + n;
+  }
+  f.rest = stream.size() - at;
+  return f;
+}
+
+// ---- seeds -------------------------------------------------------------------------------
+
+PostureRecord sampleRecord(int joints, std::uint16_t sequence) {
+  Posture p;
+  p.root_translation = glm::vec3(0.25f, 1.0f, -0.5f);
+  for (int j = 0; j < joints; ++j) {
+    p.rotations.push_back(glm::angleAxis(0.2f * static_cast<float>(j), glm::vec3(0, 1, 0)));
+  }
+  PostureRecord record;
+  encodePostureRecord(p, sequence, 12.5, record);
+  return record;
+}
+
+// Appends the datagram of `packet` to the seeds, checking that it reads back.
+template <typename Packet>
+std::vector<std::uint8_t> addPacket(std::vector<fuzz::Seed>& seeds, const char* name,
+                                    const Packet& packet) {
+  std::vector<std::uint8_t> out;
+  write(packet, out);
+  Packet back;
+  check(read(out, back), "a seed datagram reads back");
+  seeds.push_back({name, out});
+  return out;
+}
+
+std::vector<fuzz::Seed> makeSeeds() {
+  std::vector<fuzz::Seed> seeds;
+  const ClientHeader header{7, 0x0123456789abcdefull};
+  addPacket(seeds, "hello.bin", HelloPacket{header, 3});
+  addPacket(seeds, "posture_5.bin", PosturePacket{header, sampleRecord(5, 42)});
+  addPacket(seeds, "posture_52.bin", PosturePacket{header, sampleRecord(52, 65535)});
+  addPacket(seeds, "ping.bin", PingPacket{header, 9, 1.25});
+  addPacket(seeds, "hello_ack.bin", HelloAckPacket{7, 3});
+  const std::vector<std::uint8_t> pong = addPacket(seeds, "pong.bin", PongPacket{9, 1.25, 100.5});
+
+  // A snapshot of two members.
+  std::vector<std::uint8_t> snapshot, record;
+  beginSnapshot(SnapshotHeader{77, 100.0, 0}, snapshot);
+  writeRecord(sampleRecord(3, 1), record);
+  appendSnapshotEntry(7, record, snapshot);
+  record.clear();
+  writeRecord(sampleRecord(1, 2), record);
+  appendSnapshotEntry(8, record, snapshot);
+  finishSnapshot(2, snapshot);
+  SnapshotHeader snapshot_header;
+  std::vector<SnapshotEntry> entries;
+  check(readSnapshot(snapshot, snapshot_header, entries) && entries.size() == 2,
+        "the seed snapshot reads back");
+  seeds.push_back({"snapshot_2.bin", snapshot});
+
+  // TCP streams: frames of datagram bytes, an empty frame, an oversized length.
+  std::vector<std::uint8_t> stream;
+  appendFrame(pong, stream);
+  appendFrame({}, stream);
+  appendFrame(snapshot, stream);
+  check(frameAtOnce(stream).frames.size() == 3, "the seed stream has three frames");
+  seeds.push_back({"stream_3frames.bin", stream});
+  const std::vector<std::uint8_t> big(kMaxFrame + 1, 0x55);
+  appendFrame(big, stream);
+  seeds.push_back({"stream_oversized.bin", stream});
+  return seeds;
+}
+
+// ---- datagrams ---------------------------------------------------------------------------
+
+void checkRecord(const PostureRecord& record, double reference) {
+  Posture p;
+  decodePostureRecord(record, reference, p);
+  check(p.rotations.size() == record.joint_count, "a rotation per joint");
+  for (const glm::quat& q : p.rotations) {
+    check(std::isfinite(q.w) && std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z),
+          "decoded rotations are finite");
+    check(std::abs(glm::length(q) - 1.0f) < 1e-4f, "decoded rotations are unit");
+  }
+  check(std::isfinite(p.root_translation.x) && std::isfinite(p.root_translation.y) &&
+            std::isfinite(p.root_translation.z) && std::isfinite(p.time),
+        "decoded root and time are finite");
+}
+
+// Reads the datagram as a Packet; when accepted, checks write/measure/peek agree.
+template <typename Packet>
+std::optional<Packet> readExactly(std::span<const std::uint8_t> bytes, PacketType type) {
+  Packet packet;
+  if (!read(bytes, packet)) return std::nullopt;
+  std::vector<std::uint8_t> again;
+  write(packet, again);
+  check(std::ranges::equal(again, bytes), "an accepted datagram writes back to its bytes");
+  check(measure(packet) == bytes.size(), "measure() is the datagram's size");
+  check(peekPacketType(bytes) == type, "peekPacketType names the accepted type");
+  return packet;
+}
+
+template <typename Packet>
+void checkClientPacket(std::span<const std::uint8_t> bytes, PacketType type) {
+  if (auto packet = readExactly<Packet>(bytes, type)) {
+    check(peekMemberId(bytes) == packet->header.member_id, "peekMemberId is the header's");
+  }
+}
+
+void checkDatagram(std::span<const std::uint8_t> bytes) {
+  checkClientPacket<HelloPacket>(bytes, PacketType::kHello);
+  checkClientPacket<PingPacket>(bytes, PacketType::kPing);
+  (void)readExactly<HelloAckPacket>(bytes, PacketType::kHelloAck);
+  (void)readExactly<PongPacket>(bytes, PacketType::kPong);
+  if (auto posture = readExactly<PosturePacket>(bytes, PacketType::kPosture)) {
+    check(peekMemberId(bytes) == posture->header.member_id, "peekMemberId is the header's");
+    checkRecord(posture->record, 100.0);
+  }
+
+  SnapshotHeader header;
+  std::vector<SnapshotEntry> entries;
+  if (readSnapshot(bytes, header, entries)) {
+    check(peekPacketType(bytes) == PacketType::kSnapshot, "peekPacketType says snapshot");
+    check(entries.size() == header.entry_count, "entry_count entries");
+    std::size_t total = kSnapshotHeaderBytes;
+    for (const SnapshotEntry& e : entries) {
+      total += measure(e);
+      checkRecord(e.record, header.server_time);
+    }
+    check(total == bytes.size(), "a snapshot's entries cover the datagram");
+  }
+}
+
+// ---- TCP framing -------------------------------------------------------------------------
+
+void checkFraming(std::span<const std::uint8_t> stream) {
+  const Framing expected = frameAtOnce(stream);
+  FrameDecoder decoder(kMaxFrame);
+  std::size_t frame = 0;
+  bool broken = false;
+  fuzz::feedInChunks(stream, stream.empty() ? 0u : stream[0], [&](auto piece) {
+    if (broken) return;
+    if (!decoder.push(piece)) {
+      broken = true;
+      return;
+    }
+    while (auto payload = decoder.next()) {
+      check(frame < expected.frames.size(), "no more frames than the stream holds");
+      check(std::ranges::equal(*payload, expected.frames[frame]), "frames arrive intact");
+      ++frame;
+    }
+  });
+  broken = broken || decoder.broken();
+  check(broken == expected.broken, "the stream breaks exactly at an oversized length");
+  check(!broken || !decoder.error().empty(), "a broken stream says why");
+  check(frame == expected.frames.size(), "every complete frame is returned");
+  if (!broken) check(decoder.buffered() == expected.rest, "the partial frame stays buffered");
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerInitialize(int* argc, char*** argv) {
+  fuzz::writeSeedsIfAsked(*argc, *argv, makeSeeds);
+  return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::span<const std::uint8_t> bytes(data, size);
+  checkDatagram(bytes);
+  checkFraming(bytes);
+  return 0;
+}
