@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   vistel::registerPoseCommand(app);
   vistel::registerDefaultCommand(app);
   vistel::registerGesturesCommand(app);
+  vistel::registerSolveCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -20,6 +20,7 @@ void registerPoseCommand(CLI::App& app);
 // vistel-avatar default --out OUT.glb|OUT.vavatar
 void registerDefaultCommand(CLI::App& app);
 void registerGesturesCommand(CLI::App& app);
+void registerSolveCommand(CLI::App& app);
 
 // Runs `body` as the subcommand's action: an Error (or an escaped exception) is printed
 // to stderr as "vistel-avatar <command>: error: <message>" and makes the program exit with

@@ -15,9 +15,6 @@
 #include "offline/tool/tool_commands.hpp"
 
 namespace vistel {
-
-void registerSolveCommand(CLI::App& app);
-
 namespace {
 
 struct SolveCommandOptions {

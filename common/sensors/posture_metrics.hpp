@@ -1,0 +1,36 @@
+// Scoring solved postures against the true ones on the same skeleton (the simulator's clip):
+// MPJPE (mean per-joint position error) over the upper body and over all joints, MPJRE
+// (mean per-joint rotation error, model-space rotations), and jitter as the mean jerk
+// (third difference of joint positions) of the solved and of the true motion.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "common/anim/posture.hpp"
+#include "common/anim/skeleton.hpp"
+#include "common/sensors/body_roles.hpp"
+
+namespace vistel {
+
+struct PostureMetrics {
+  int frames = 0;
+  double mpjpe_upper_m = 0.0;  // spine joints, neck, head, shoulders, elbows, wrists
+  double mpjpe_all_m = 0.0;    // every joint of the skeleton
+  double mpjre_upper_deg = 0.0;
+  double mpjre_all_deg = 0.0;
+  double max_upper_m = 0.0;  // worst single upper-body joint error
+  double jerk_solved = 0.0;  // mean |jerk| over all joints, m/s^3
+  double jerk_truth = 0.0;
+};
+
+// The upper-body joints by role: spine, chest, upper_chest, neck, head, upper arms (the
+// shoulder joints), forearms (elbows), hands (wrists) — those the skeleton has.
+std::vector<int> upperBodyJoints(const JointRoles& roles);
+
+// truth.size() == solved.size() postures on `skeleton`, one every frame_time seconds.
+PostureMetrics measurePostures(const Skeleton& skeleton, const JointRoles& roles,
+                               std::span<const Posture> truth, std::span<const Posture> solved,
+                               double frame_time);
+
+}  // namespace vistel

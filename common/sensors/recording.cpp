@@ -1,0 +1,404 @@
+#include "common/sensors/recording.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include "common/base/bytes.hpp"
+#include "common/base/file.hpp"
+
+namespace vistel {
+namespace {
+
+constexpr std::uint8_t kMagic[8] = {'V', 'R', 'E', 'C', '\r', '\n', 0x1a, '\n'};
+constexpr std::uint8_t kTypeHeader = 1;
+constexpr std::uint8_t kTypeFrame = 2;
+constexpr std::uint8_t kTypeCalibration = 3;
+constexpr std::size_t kFileHeaderSize = 12;
+
+// ---- payload writers ---------------------------------------------------------------------
+
+void writeStation(ByteWriter& w, const StationReading& r) {
+  w.u8(r.valid ? 1 : 0);
+  w.u8(static_cast<std::uint8_t>(r.status));
+  w.f64(r.time);
+  w.f32(r.position.x);
+  w.f32(r.position.y);
+  w.f32(r.position.z);
+  w.f32(r.orientation.w);
+  w.f32(r.orientation.x);
+  w.f32(r.orientation.y);
+  w.f32(r.orientation.z);
+}
+
+void writeGlove(ByteWriter& w, const GloveReading& g) {
+  w.u8(g.valid ? 1 : 0);
+  w.f64(g.time);
+  for (float a : g.angles) w.f32(a);
+}
+
+// Starts a record: size placeholder and type; finish() patches the size and appends the CRC.
+std::size_t beginRecord(std::vector<std::uint8_t>& out, std::uint8_t type) {
+  const std::size_t start = out.size();
+  ByteWriter w(out);
+  w.u32(0);
+  w.u8(type);
+  return start;
+}
+
+void finishRecord(std::vector<std::uint8_t>& out, std::size_t start) {
+  const std::size_t payload = out.size() - start - 5;
+  ByteWriter w(out);
+  w.patchU32(start, static_cast<std::uint32_t>(payload));
+  w.u32(crc32(std::span<const std::uint8_t>(out).subspan(start + 4, payload + 1)));
+}
+
+// ---- payload readers (every value checked) -------------------------------------------------
+
+bool finite(double v) { return std::isfinite(v); }
+
+bool readStation(ByteReader& r, StationReading& out, std::string& why) {
+  const std::uint8_t flags = r.u8();
+  out.status = static_cast<char>(r.u8());
+  out.time = r.f64();
+  out.position.x = r.f32();
+  out.position.y = r.f32();
+  out.position.z = r.f32();
+  out.orientation.w = r.f32();
+  out.orientation.x = r.f32();
+  out.orientation.y = r.f32();
+  out.orientation.z = r.f32();
+  out.valid = (flags & 1) != 0;
+  if (!r.ok()) {
+    why = "station reading cut short";
+    return false;
+  }
+  if (flags > 1) {
+    why = fmt::format("station flags {:#x}", flags);
+    return false;
+  }
+  if (!finite(out.time) || !finite(out.position.x) || !finite(out.position.y) ||
+      !finite(out.position.z)) {
+    why = "non-finite station time or position";
+    return false;
+  }
+  const float n = glm::length(out.orientation);
+  if (out.valid && !(std::abs(n - 1.0f) < 1e-3f)) {
+    why = fmt::format("station orientation of length {}", n);
+    return false;
+  }
+  return true;
+}
+
+bool readGlove(ByteReader& r, GloveReading& out, std::string& why) {
+  const std::uint8_t flags = r.u8();
+  out.time = r.f64();
+  for (float& a : out.angles) a = r.f32();
+  out.valid = (flags & 1) != 0;
+  if (!r.ok()) {
+    why = "glove reading cut short";
+    return false;
+  }
+  if (flags > 1 || !finite(out.time)) {
+    why = "bad glove flags or time";
+    return false;
+  }
+  for (float a : out.angles) {
+    if (!finite(a) || std::abs(a) > 10.0f) {
+      why = "glove angle out of range";
+      return false;
+    }
+  }
+  return true;
+}
+
+bool readCalibration(ByteReader& r, CalibrationRecord& out, std::string& why) {
+  out.start_time = r.f64();
+  out.end_time = r.f64();
+  out.pose = r.string(1024);
+  for (StationReading& s : out.stations) {
+    if (!readStation(r, s, why)) return false;
+  }
+  for (GloveReading& g : out.gloves) {
+    if (!readGlove(r, g, why)) return false;
+  }
+  if (!r.ok() || !finite(out.start_time) || !finite(out.end_time)) {
+    why = "calibration cut short or with a non-finite time";
+    return false;
+  }
+  return true;
+}
+
+bool readHeader(ByteReader& r, RecordingHeader& out, std::string& why) {
+  out.participant = r.string(4096);
+  out.source = r.string(4096);
+  const std::uint32_t stations = r.u32();
+  if (!r.ok() || stations > 16) {
+    why = "bad station count";
+    return false;
+  }
+  for (std::uint32_t i = 0; i < stations; ++i) {
+    SensorMapEntry e;
+    e.station = r.u8();
+    const std::uint8_t site = r.u8();
+    if (site >= kBodySiteCount) {
+      why = fmt::format("unknown body site {}", site);
+      return false;
+    }
+    e.site = static_cast<BodySite>(site);
+    out.stations.push_back(e);
+  }
+  const std::uint32_t gloves = r.u32();
+  if (!r.ok() || gloves > 2) {
+    why = "bad glove count";
+    return false;
+  }
+  for (std::uint32_t i = 0; i < gloves; ++i) {
+    GloveMapEntry g;
+    const std::uint8_t hand = r.u8();
+    g.sensor_count = r.u8();
+    if (hand >= kHandCount || (g.sensor_count != 18 && g.sensor_count != 22)) {
+      why = "bad glove entry";
+      return false;
+    }
+    g.hand = static_cast<Hand>(hand);
+    out.gloves.push_back(g);
+  }
+  const std::uint8_t has_calibration = r.u8();
+  if (has_calibration > 1) {
+    why = "bad calibration flag";
+    return false;
+  }
+  if (has_calibration == 1) {
+    CalibrationRecord c;
+    if (!readCalibration(r, c, why)) return false;
+    out.calibration = std::move(c);
+  }
+  out.config_text = r.string(kRecordingMaxPayload);
+  if (!r.ok()) {
+    why = "header cut short";
+    return false;
+  }
+  return true;
+}
+
+bool readFrame(ByteReader& r, SensorFrame& out, std::string& why) {
+  out.time = r.f64();
+  out.sequence = r.u64();
+  if (!r.ok() || !finite(out.time)) {
+    why = "frame time cut short or not finite";
+    return false;
+  }
+  for (StationReading& s : out.stations) {
+    if (!readStation(r, s, why)) return false;
+  }
+  for (GloveReading& g : out.gloves) {
+    if (!readGlove(r, g, why)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+void encodeRecordingFileHeader(std::vector<std::uint8_t>& out) {
+  out.insert(out.end(), std::begin(kMagic), std::end(kMagic));
+  ByteWriter(out).u32(kRecordingVersion);
+}
+
+void encodeHeaderRecord(const RecordingHeader& h, std::vector<std::uint8_t>& out) {
+  const std::size_t start = beginRecord(out, kTypeHeader);
+  ByteWriter w(out);
+  w.string(h.participant);
+  w.string(h.source);
+  w.u32(static_cast<std::uint32_t>(h.stations.size()));
+  for (const SensorMapEntry& e : h.stations) {
+    w.u8(static_cast<std::uint8_t>(e.station));
+    w.u8(static_cast<std::uint8_t>(e.site));
+  }
+  w.u32(static_cast<std::uint32_t>(h.gloves.size()));
+  for (const GloveMapEntry& g : h.gloves) {
+    w.u8(static_cast<std::uint8_t>(g.hand));
+    w.u8(static_cast<std::uint8_t>(g.sensor_count));
+  }
+  w.u8(h.calibration ? 1 : 0);
+  if (h.calibration) {
+    w.f64(h.calibration->start_time);
+    w.f64(h.calibration->end_time);
+    w.string(h.calibration->pose);
+    for (const StationReading& s : h.calibration->stations) writeStation(w, s);
+    for (const GloveReading& g : h.calibration->gloves) writeGlove(w, g);
+  }
+  w.string(h.config_text);
+  finishRecord(out, start);
+}
+
+void encodeFrameRecord(const SensorFrame& f, std::vector<std::uint8_t>& out) {
+  const std::size_t start = beginRecord(out, kTypeFrame);
+  ByteWriter w(out);
+  w.f64(f.time);
+  w.u64(f.sequence);
+  for (const StationReading& s : f.stations) writeStation(w, s);
+  for (const GloveReading& g : f.gloves) writeGlove(w, g);
+  finishRecord(out, start);
+}
+
+void encodeCalibrationRecord(const CalibrationRecord& c, std::vector<std::uint8_t>& out) {
+  const std::size_t start = beginRecord(out, kTypeCalibration);
+  ByteWriter w(out);
+  w.f64(c.start_time);
+  w.f64(c.end_time);
+  w.string(c.pose);
+  for (const StationReading& s : c.stations) writeStation(w, s);
+  for (const GloveReading& g : c.gloves) writeGlove(w, g);
+  finishRecord(out, start);
+}
+
+Result<Recording> decodeRecording(std::span<const std::uint8_t> bytes, std::string_view source) {
+  if (bytes.size() < kFileHeaderSize) {
+    return fail("{}: not a recording: {} bytes, shorter than the 12-byte file header", source,
+                bytes.size());
+  }
+  if (std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0) {
+    return fail("{}: not a recording (bad magic at byte 0)", source);
+  }
+  std::uint32_t version;
+  std::memcpy(&version, bytes.data() + 8, 4);
+  if (version != kRecordingVersion) {
+    return fail("{}: recording format version {} (this build reads {})", source, version,
+                kRecordingVersion);
+  }
+  Recording rec;
+  std::size_t pos = kFileHeaderSize;
+  bool have_header = false;
+  std::size_t index = 0;
+  // Stops at the first bad record: before the header record that is an error.
+  auto stop = [&](std::string why) -> Result<Recording> {
+    if (!have_header) return fail("{}: header record at byte {}: {}", source, pos, why);
+    rec.complete = false;
+    rec.stop_offset = pos;
+    rec.stop_reason = fmt::format("{}: record {} at byte {}: {}; kept {} frames before it", source,
+                                  index, pos, why, rec.frames.size());
+    return std::move(rec);
+  };
+  while (pos < bytes.size()) {
+    const std::size_t left = bytes.size() - pos;
+    if (left < 9)
+      return stop(fmt::format("truncated ({} bytes left, a record needs at least 9)", left));
+    std::uint32_t size;
+    std::memcpy(&size, bytes.data() + pos, 4);
+    if (size > kRecordingMaxPayload)
+      return stop(fmt::format("record size {} exceeds {}", size, kRecordingMaxPayload));
+    if (left < static_cast<std::size_t>(size) + 9) {
+      return stop(fmt::format("truncated (the record needs {} bytes, {} left)", size + 9, left));
+    }
+    const std::uint8_t type = bytes[pos + 4];
+    const std::span<const std::uint8_t> typed = bytes.subspan(pos + 4, size + 1);
+    std::uint32_t stored;
+    std::memcpy(&stored, bytes.data() + pos + 5 + size, 4);
+    if (crc32(typed) != stored) return stop("checksum mismatch");
+    ByteReader r(typed.subspan(1));
+    std::string why;
+    if (!have_header) {
+      if (type != kTypeHeader)
+        return stop(fmt::format("expected the header record, found type {}", type));
+      if (!readHeader(r, rec.header, why)) return stop(why);
+      have_header = true;
+    } else if (type == kTypeFrame) {
+      SensorFrame f;
+      if (!readFrame(r, f, why)) return stop(why);
+      rec.frames.push_back(f);
+    } else if (type == kTypeCalibration) {
+      CalibrationRecord c;
+      if (!readCalibration(r, c, why)) return stop(why);
+      rec.calibrations.push_back(std::move(c));
+      rec.calibration_after.push_back(rec.frames.size());
+    } else {
+      return stop(fmt::format("unknown record type {}", type));
+    }
+    if (r.remaining() != 0)
+      return stop(fmt::format("{} unexpected bytes at the end of the record", r.remaining()));
+    pos += static_cast<std::size_t>(size) + 9;
+    ++index;
+  }
+  if (!have_header) return fail("{}: no header record after the file header", source);
+  return rec;
+}
+
+Result<Recording> loadRecording(const std::string& path) {
+  Result<std::vector<std::uint8_t>> bytes = readFileBytes(path);
+  if (!bytes) return bytes.error();
+  return decodeRecording(*bytes, path);
+}
+
+Result<std::unique_ptr<RecordingWriter>> RecordingWriter::create(const std::string& path,
+                                                                 const RecordingHeader& header) {
+  std::unique_ptr<RecordingWriter> w(new RecordingWriter());
+  w->path_ = path;
+  w->fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
+  if (w->fd_ < 0) return fail("{}: cannot create recording: {}", path, std::strerror(errno));
+  w->buffer_.reserve(4096);
+  encodeRecordingFileHeader(w->buffer_);
+  encodeHeaderRecord(header, w->buffer_);
+  if (Status s = w->writeRecord(); !s) return s.error();
+  return w;
+}
+
+RecordingWriter::~RecordingWriter() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+Status RecordingWriter::writeRecord() {
+  std::size_t done = 0;
+  while (done < buffer_.size()) {
+    const ssize_t n = ::write(fd_, buffer_.data() + done, buffer_.size() - done);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const int err = errno;
+      buffer_.clear();
+      return fail("{}: write failed: {}", path_, std::strerror(err));
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  buffer_.clear();
+  return {};
+}
+
+Status RecordingWriter::append(const SensorFrame& frame) {
+  encodeFrameRecord(frame, buffer_);
+  if (Status s = writeRecord(); !s) return s;
+  ++frames_;
+  return {};
+}
+
+Status RecordingWriter::appendCalibration(const CalibrationRecord& record) {
+  encodeCalibrationRecord(record, buffer_);
+  return writeRecord();
+}
+
+Status RecordingWriter::sync() {
+  if (::fdatasync(fd_) != 0) return fail("{}: fdatasync failed: {}", path_, std::strerror(errno));
+  return {};
+}
+
+RecordingSource::RecordingSource(Recording recording, std::string name)
+    : recording_(std::move(recording)), name_(std::move(name)) {}
+
+PollResult RecordingSource::poll(double /*timeout_s*/, SensorFrame& frame) {
+  if (next_ >= recording_.frames.size()) {
+    return PollResult::end(
+        recording_.complete ? fmt::format("{}: end of recording ({} frames)", name_, next_)
+                            : fmt::format("end of the readable part: {}", recording_.stop_reason));
+  }
+  frame = recording_.frames[next_++];
+  return PollResult::frame();
+}
+
+std::string RecordingSource::describe() const {
+  return fmt::format("recording {} ({} frames{})", name_, recording_.frames.size(),
+                     recording_.complete ? "" : ", damaged tail");
+}
+
+}  // namespace vistel

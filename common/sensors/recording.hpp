@@ -1,0 +1,130 @@
+// .vrec recordings: a site's raw sensor stream (DESIGN.md §6), replayable through the
+// solver (vistel-bot --recording FILE.vrec).
+//
+// Layout, little-endian:
+//   file header  "VREC\r\n\x1a\n" (8 bytes; the CR LF and ^Z catch text-mode mangling),
+//                u32 format version (kRecordingVersion)
+//   records      u32 payload size, u8 type, payload, u32 CRC-32 of the type byte and the
+//                payload (crc32 from common/base/bytes.hpp)
+// Record types: 1 header (must come first: participant, sensor map, optional calibration,
+// the sensors config text), 2 frame (one SensorFrame, fixed size), 3 calibration (a
+// calibration taken during the session: its window and the averaged readings).
+//
+// The writer appends each record with a single write() on an O_APPEND descriptor, so a
+// process killed mid-write loses at most the record being written; the reader loads every
+// record up to the last good one and says where (byte offset) and why it stopped.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "common/base/result.hpp"
+#include "common/sensors/sensor_frame.hpp"
+#include "common/sensors/sensor_source.hpp"
+
+namespace vistel {
+
+inline constexpr std::uint32_t kRecordingVersion = 1;
+inline constexpr std::size_t kRecordingMaxPayload = 1u << 20;
+
+// Which tracker station was worn where, and which gloves were on.
+struct SensorMapEntry {
+  int station = 0;  // device station number (1..4), 0 for a simulated or HID source
+  BodySite site = BodySite::kHead;
+};
+struct GloveMapEntry {
+  Hand hand = Hand::kLeft;
+  int sensor_count = 22;
+};
+
+// A calibration: the participant held the calibration pose over [start, end]; the
+// averaged readings of that window (what calibrateBody needs besides the skeleton).
+struct CalibrationRecord {
+  double start_time = 0.0;
+  double end_time = 0.0;
+  std::string pose;  // "standard" (arms down) or a description, e.g. "clip frame 0"
+  std::array<StationReading, kBodySiteCount> stations{};
+  std::array<GloveReading, kHandCount> gloves{};
+};
+
+struct RecordingHeader {
+  std::string participant;
+  std::string source;  // what produced the frames ("fastrak /dev/ttyUSB0", "sim:clip.bvh")
+  std::vector<SensorMapEntry> stations;
+  std::vector<GloveMapEntry> gloves;
+  std::optional<CalibrationRecord> calibration;
+  std::string config_text;  // the sensors config in use (TOML), may be empty
+};
+
+struct Recording {
+  RecordingHeader header;
+  std::vector<SensorFrame> frames;
+  std::vector<CalibrationRecord> calibrations;  // taken during the session, in order
+  std::vector<std::size_t> calibration_after;   // frames recorded before each calibration
+  bool complete = true;                         // every byte was a good record
+  std::string stop_reason;                      // why reading stopped early (empty when complete)
+  std::uint64_t stop_offset = 0;                // byte offset of the first bad record
+};
+
+// Decodes a whole file's bytes. Fails (naming source, byte offset and reason) only when not
+// even the file header and the header record are intact; otherwise returns every good
+// record before the first bad one, with complete = false and the reason.
+Result<Recording> decodeRecording(std::span<const std::uint8_t> bytes, std::string_view source);
+Result<Recording> loadRecording(const std::string& path);
+
+// Encodes records (the writer's format), for tests and tools.
+void encodeRecordingFileHeader(std::vector<std::uint8_t>& out);
+void encodeHeaderRecord(const RecordingHeader& header, std::vector<std::uint8_t>& out);
+void encodeFrameRecord(const SensorFrame& frame, std::vector<std::uint8_t>& out);
+void encodeCalibrationRecord(const CalibrationRecord& record, std::vector<std::uint8_t>& out);
+
+class RecordingWriter {
+ public:
+  // Creates (truncates) the file and writes the file header and the header record.
+  static Result<std::unique_ptr<RecordingWriter>> create(const std::string& path,
+                                                         const RecordingHeader& header);
+  ~RecordingWriter();
+  RecordingWriter(const RecordingWriter&) = delete;
+  RecordingWriter& operator=(const RecordingWriter&) = delete;
+
+  // One record per call, one write() each; allocation-free after the first frame.
+  Status append(const SensorFrame& frame);
+  Status appendCalibration(const CalibrationRecord& record);
+  // Forces the data to the disk (fdatasync), beyond what a process crash needs.
+  Status sync();
+  std::uint64_t framesWritten() const { return frames_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  RecordingWriter() = default;
+  Status writeRecord();
+
+  int fd_ = -1;
+  std::string path_;
+  std::vector<std::uint8_t> buffer_;
+  std::uint64_t frames_ = 0;
+};
+
+// Replays a recording's frames in order (as fast as polled; the frames keep their times):
+// kEnd after the last one, naming where and why the file stopped when it was damaged.
+class RecordingSource final : public SensorSource {
+ public:
+  explicit RecordingSource(Recording recording, std::string name);
+  PollResult poll(double timeout_s, SensorFrame& frame) override;
+  std::string describe() const override;
+  const Recording& recording() const { return recording_; }
+  std::size_t position() const { return next_; }
+
+ private:
+  Recording recording_;
+  std::string name_;
+  std::size_t next_ = 0;
+};
+
+}  // namespace vistel

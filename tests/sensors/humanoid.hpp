@@ -1,0 +1,36 @@
+// A canonical 52-joint humanoid for the sensor tests (T-pose rest, metres, +Y up, facing
+// +Z, left = +X), optionally with scrambled joint frames (random rest rotations with the
+// same joint positions), as mocap skeletons have.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "common/anim/posture.hpp"
+#include "common/anim/skeleton.hpp"
+#include "common/sensors/body_roles.hpp"
+#include "common/sensors/sensor_frame.hpp"
+#include "common/sensors/sensor_mount.hpp"
+
+namespace vistel::test {
+
+Skeleton makeHumanoid(bool scrambled_frames = false, std::uint64_t seed = 7);
+
+// Model-space joint positions of a posture.
+std::vector<glm::vec3> jointPositions(const Skeleton& skeleton, const Posture& posture);
+
+// Sets joint j's world rotation (model space) to `world` in posture p (children keep their
+// local rotations).
+void setWorldRotation(const Skeleton& skeleton, Posture& p, int j, const glm::quat& world);
+
+// Angle between two rotations in degrees, precise near zero (acos is not).
+float angleDegrees(const glm::quat& a, const glm::quat& b);
+
+// A noiseless sensor frame for a posture: every station at its attached sensor's pose.
+SensorFrame exactFrame(const Skeleton& skeleton, const Posture& posture,
+                       std::span<const AttachedSensor> sensors, double time);
+
+}  // namespace vistel::test

@@ -1,0 +1,97 @@
+// Sensor configs: the shipped files parse to what they say; mistakes get errors that name
+// the file, the key and the reason.
+#include <gtest/gtest.h>
+
+#include "common/base/embedded.hpp"
+#include "common/sensors/sensor_config.hpp"
+
+namespace vistel {
+namespace {
+
+TEST(SensorConfig, ShippedFilesParse) {
+  auto fastrak = loadSensorSetup("config/sensors/fastrak.toml");
+  ASSERT_TRUE(fastrak.ok()) << fastrak.error().message;
+  EXPECT_EQ(fastrak->tracker_kind, TrackerKind::kFastrak);
+  EXPECT_EQ(fastrak->tracker.transport, TrackerTransport::kSerial);
+  EXPECT_EQ(fastrak->tracker.format.encoding, FastrakEncoding::kBinary);
+  EXPECT_EQ(fastrakRecordSize(fastrak->tracker.format), 32u);
+  ASSERT_EQ(fastrak->tracker.stations.size(), 4u);
+  EXPECT_EQ(fastrak->tracker.stations[2].site, BodySite::kLeftWrist);
+  EXPECT_EQ(fastrak->tracker.usb.vendor_id, 0x0F44);
+  ASSERT_EQ(fastrak->gloves.size(), 2u);
+  EXPECT_EQ(fastrak->gloves[0].hand, Hand::kLeft);
+  EXPECT_EQ(fastrak->gloves[1].port, "/dev/ttyUSB2");
+  EXPECT_EQ(fastrak->gloves[1].calibration.sensors.size(), 22u);
+  EXPECT_EQ(fastrak->calibration.alignment, AlignmentMode::kFacing);
+  EXPECT_TRUE(fastrak->calibration.estimate_proportions);
+  // +Z (down on the unit) maps to -Y.
+  EXPECT_NEAR((fastrak->tracker.transmitter.rotation * glm::vec3(0, 0, 1)).y, -1.0f, 1e-6f);
+  EXPECT_FALSE(fastrak->text.empty());
+
+  auto sim = loadSensorSetup("config/sensors/sim.toml");
+  ASSERT_TRUE(sim.ok()) << sim.error().message;
+  EXPECT_EQ(sim->tracker_kind, TrackerKind::kNone);
+  EXPECT_EQ(sim->sim.glove, GlovePattern::kCycle);
+  EXPECT_NEAR(sim->sim.position_noise_m, 0.0008f, 1e-9f);
+  EXPECT_GT(sim->sim.hold_s, sim->calibration.window_s);
+
+  auto hid = loadSensorSetup("config/sensors/hid.toml");
+  ASSERT_TRUE(hid.ok()) << hid.error().message;
+  EXPECT_EQ(hid->tracker_kind, TrackerKind::kHid);
+  EXPECT_EQ(hid->hid.stations.size(), 4u);
+  EXPECT_EQ(hid->hid.stations[3].position_type, HidValueType::kI16);
+
+  auto glove =
+      parseGloveConfig(std::string(*embeddedConfig("sensors/cyberglove.toml")), "cyberglove.toml");
+  ASSERT_TRUE(glove.ok()) << glove.error().message;
+  EXPECT_TRUE(glove->stream);
+}
+
+void expectError(const std::string& toml, const std::string& fragment) {
+  auto r = parseSensorSetup(toml, "bad.toml");
+  ASSERT_FALSE(r.ok()) << toml;
+  EXPECT_NE(r.error().message.find("bad.toml"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find(fragment), std::string::npos) << r.error().message;
+}
+
+const char* kStations = R"(
+[[station]]
+number = 1
+site = "head"
+[[station]]
+number = 2
+site = "chest"
+[[station]]
+number = 3
+site = "left_wrist"
+[[station]]
+number = 4
+site = "right_wrist"
+)";
+
+TEST(SensorConfig, MistakesNameTheKeyAndTheReason) {
+  expectError("[tracker]\nport = 3\n", "tracker.port: expected a string");
+  expectError("[tracker]\nbaud = 0\n", "tracker.baud");
+  expectError("[tracker]\nencoding = \"hex\"\n", "expected one of 'binary', 'ascii'");
+  expectError(std::string("[tracker]\noutput_list = [2, 7]\n") + kStations, "item code 7");
+  expectError(std::string("[tracker]\noutput_list = [0, 1]\n") + kStations,
+              "no position or orientation");
+  expectError("[tracker]\nprot = \"/dev/ttyS0\"\n", "unknown key 'prot'");
+  expectError("[tracker]\nkind = \"fastrak\"\n[[station]]\nnumber = 1\nsite = \"head\"\n",
+              "no station is worn at 'chest'");
+  expectError(
+      "[[station]]\nnumber = 1\nsite = \"head\"\n[[station]]\nnumber = 2\nsite = \"head\"\n",
+      "listed twice");
+  expectError("[[station]]\nnumber = 9\nsite = \"head\"\n", "station.number");
+  expectError("[solver]\nstance = \"lying\"\n", "solver.stance");
+  expectError("[solver]\npelvis_tilt_share = 2\n", "outside [0, 1]");
+  expectError("[[glove]]\nconfig = \"config/sensors/none.toml\"\n", "none.toml");
+  expectError("[hid]\nreport_size = 8\n[[hid.station]]\nsite = \"head\"\nposition_offset = 4\n",
+              "reach past the 8-byte report");
+  expectError("participant = \n", "bad.toml:1");
+  EXPECT_FALSE(parseGloveConfig("sensors = 20\n", "g.toml").ok());
+  EXPECT_FALSE(loadSensorSetup("config/sensors/no-such-file.toml").ok());
+}
+
+}  // namespace
+}  // namespace vistel
