@@ -1,0 +1,372 @@
+// vistel-client: the site client (DESIGN.md §1, §6).
+//
+//   vistel-client --server HOST:PORT --room R --name N [--avatar FILE] [--source bvh:FILE]
+//                 [--headless] [--duration S] [--screenshot FILE] [--stats-json FILE]
+//                 [--stereo off|side-by-side|anaglyph] [--view room|first-person]
+//                 [--frames DIR [--frames-every N]] [--config FILE]
+//
+// Joins room R, streams its own posture (a clip with --source, else the avatar's rest
+// posture), receives everyone's into jitter buffers, and draws the room (RoomView: a
+// window with a display, EGL offscreen without one). --headless draws nothing but
+// still samples every remote posture each frame. --frames writes every Nth frame
+// (--frames-every, default 1) as a PNG into DIR; --screenshot writes the last frame at
+// exit (without --duration it runs 3 s).
+// --stats-json writes, on exit, the receive rates, latency and frames rendered.
+//
+// Threads: this (main) thread owns the window/GL and renders; a network thread runs
+// Asio (NetDriver); a source thread produces the own postures; the room view skins in
+// its worker pool. Exit status: 0, 1 on an error (the session's reason is printed), 2 on
+// bad usage. SIGINT/SIGTERM leave the room cleanly.
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <unordered_map>
+#include <vector>
+
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "client/net/asio.hpp"
+#include "client/net/client_config.hpp"
+#include "client/net/clip_player.hpp"
+#include "client/net/data_dir.hpp"
+#include "client/net/net_driver.hpp"
+#include "client/view/room_view.hpp"
+#include "common/avatar/avatar_io.hpp"
+#include "common/base/file.hpp"
+#include "common/motion/bvh.hpp"
+
+namespace {
+
+using namespace vistel;
+using namespace vistel::net;
+
+std::atomic<bool> g_stop{false};
+extern "C" void onSignal(int) { g_stop = true; }
+
+using Clock = std::chrono::steady_clock;
+
+Clock::duration seconds(double s) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+}
+
+bool hasDisplay() {
+  for (const char* var : {"DISPLAY", "WAYLAND_DISPLAY"}) {
+    const char* v = std::getenv(var);
+    if (v != nullptr && *v != '\0') return true;
+  }
+  return false;
+}
+
+// The participant's own postures, produced on the source thread, read by the renderer.
+class OwnSource {
+ public:
+  OwnSource(std::unique_ptr<ClipPlayer> player, Posture rest, double rate_hz)
+      : player_(std::move(player)), latest_(std::move(rest)), rate_hz_(rate_hz) {}
+
+  // Sends a posture per frame of the clip (or rate_hz of the rest posture) until stop.
+  void run(NetDriver& driver, const std::atomic<bool>& stop) {
+    const double interval = player_ ? player_->frameTime() : 1.0 / rate_hz_;
+    const auto start = Clock::now();
+    Posture p = latest_;
+    for (std::int64_t frame = 0; !stop; ++frame) {
+      const double t = static_cast<double>(frame) * interval;
+      std::this_thread::sleep_until(start + seconds(t));
+      if (player_) player_->sample(t, /*loop=*/true, p);
+      driver.sendPosture(p);
+      std::lock_guard lock(mutex_);
+      latest_ = p;
+    }
+  }
+
+  Posture latest() const {
+    std::lock_guard lock(mutex_);
+    return latest_;
+  }
+
+ private:
+  std::unique_ptr<ClipPlayer> player_;
+  mutable std::mutex mutex_;
+  Posture latest_;
+  double rate_hz_;
+};
+
+// One roster member as the frame sees it (copied out under the session lock).
+struct FrameMember {
+  std::uint32_t id = 0;
+  std::string name;
+  std::string avatar_hash;
+  Seat seat;
+  bool is_self = false;
+  bool has_posture = false;
+  Posture posture;
+};
+
+glm::mat4 seatPlacement(const Seat& seat) {
+  return glm::rotate(glm::translate(glm::mat4(1.0f), glm::vec3(seat.x, 0.0f, seat.z)), seat.yaw,
+                     glm::vec3(0.0f, 1.0f, 0.0f));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Command line.
+  CLI::App app{"vistel-client: join a room, stream your posture, see everyone"};
+  std::string server_text, room, name, avatar_path, source_text, screenshot, stats_path;
+  std::string frames_dir, stereo_text = "off", view_text = "room";
+  std::string config_path = "config/client.toml";
+  bool headless = false;
+  double duration = 0.0;
+  int frames_every = 1;
+  app.add_option("--server", server_text, "session server HOST:PORT")->required();
+  app.add_option("--room", room, "room to join")->required();
+  app.add_option("--name", name, "participant name")->required();
+  app.add_option("--avatar", avatar_path, "avatar file (.vavatar; default: the data folder's)");
+  app.add_option("--source", source_text, "own posture source: bvh:FILE (default: rest posture)");
+  app.add_flag("--headless", headless, "no window and no rendering");
+  app.add_option("--duration", duration, "leave after this many seconds")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--screenshot", screenshot, "write the last frame as PNG at exit");
+  app.add_option("--stats-json", stats_path, "write receive statistics as JSON at exit");
+  app.add_option("--stereo", stereo_text, "off, side-by-side or anaglyph")
+      ->check(CLI::IsMember({"off", "side-by-side", "anaglyph"}));
+  app.add_option("--view", view_text, "room or first-person")
+      ->check(CLI::IsMember({"room", "first-person"}));
+  app.add_option("--frames", frames_dir, "write rendered frames as PNG into this folder");
+  app.add_option("--frames-every", frames_every, "with --frames: write every Nth frame")
+      ->check(CLI::Range(1, 100000));
+  app.add_option("--config", config_path, "client settings (TOML); built-in defaults if absent");
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_default_logger(spdlog::stderr_color_mt("vistel-client"));
+
+  if (headless && (!screenshot.empty() || !frames_dir.empty())) {
+    std::fprintf(stderr,
+                 "vistel-client: --screenshot and --frames need rendering (drop "
+                 "--headless)\n");
+    return 2;
+  }
+  if (!screenshot.empty() && duration == 0.0) duration = 3.0;
+
+  // Settings, address, own avatar.
+  auto config = loadClientConfig(config_path);
+  if (!config) {
+    spdlog::error("{}", config.error().message);
+    return 1;
+  }
+  auto server = parseServerAddress(server_text);
+  if (!server) {
+    spdlog::error("{}", server.error().message);
+    return 2;
+  }
+  if (avatar_path.empty()) avatar_path = defaultAvatarPath();
+  auto avatar_bytes = readFileBytes(avatar_path, 1u << 30);
+  if (!avatar_bytes) {
+    spdlog::error("avatar: {}", avatar_bytes.error().message);
+    return 1;
+  }
+  const std::string own_hash = avatarContentHash(*avatar_bytes);
+  auto cache = std::make_shared<AvatarCache>(avatarCacheFolder(config->cache_dir));
+  auto own_avatar = cache->insert(own_hash, *avatar_bytes);
+  if (!own_avatar) {
+    spdlog::error("{}: {}", avatar_path, own_avatar.error().message);
+    return 1;
+  }
+  const Skeleton& own_skeleton = (*own_avatar)->skeleton;
+
+  // Own posture source.
+  std::unique_ptr<ClipPlayer> player;
+  if (!source_text.empty()) {
+    if (source_text.rfind("bvh:", 0) != 0) {
+      std::fprintf(stderr,
+                   "vistel-client: --source %s: expected bvh:FILE (sensor sources are "
+                   "not supported yet)\n",
+                   source_text.c_str());
+      return 2;
+    }
+    auto clip = loadBvh(source_text.substr(4));
+    if (!clip) {
+      spdlog::error("{}", clip.error().message);
+      return 1;
+    }
+    auto created = ClipPlayer::create(std::move(*clip), own_skeleton);
+    if (!created) {
+      spdlog::error("{}", created.error().message);
+      return 1;
+    }
+    player = std::move(*created);
+  }
+  OwnSource source(std::move(player), restPosture(own_skeleton), config->idle_rate_hz);
+
+  // The view (unless headless): offscreen without a display; falls back to headless
+  // with a warning if no GL context can be made.
+  std::unique_ptr<RoomView> view;
+  if (!headless) {
+    ViewOptions options;
+    options.width = config->width;
+    options.height = config->height;
+    options.offscreen = !hasDisplay();
+    options.worker_threads = config->worker_threads;
+    options.stereo = stereo_text == "side-by-side" ? StereoMode::kSideBySide
+                     : stereo_text == "anaglyph"   ? StereoMode::kAnaglyph
+                                                   : StereoMode::kOff;
+    options.view = view_text == "first-person" ? ViewMode::kFirstPerson : ViewMode::kRoom;
+    options.title = "vistel - " + room + " - " + name;
+    auto created = RoomView::create(options);
+    if (created) {
+      view = std::move(*created);
+      std::printf("vistel-client: rendering with %s\n", view->backendDescription().c_str());
+    } else {
+      std::printf("vistel-client: no rendering (%s); continuing headless\n",
+                  created.error().message.c_str());
+    }
+    if (view && !frames_dir.empty()) {
+      std::error_code ec;
+      std::filesystem::create_directories(frames_dir, ec);
+      std::printf("vistel-client: writing frames to %s\n", frames_dir.c_str());
+    }
+  }
+
+  // Network thread, source thread.
+  SessionSettings settings = config->session;
+  settings.room = room;
+  settings.name = name;
+  settings.avatar_hash = own_hash;
+  settings.avatar_bytes =
+      std::make_shared<const std::vector<std::uint8_t>>(std::move(*avatar_bytes));
+  settings.avatar_joint_count = own_skeleton.jointCount();
+  asio::io_context io;
+  auto work = asio::make_work_guard(io);
+  auto driver = NetDriver::create(io, *server, settings, cache);
+  driver->start();
+  std::thread network([&io] { io.run(); });
+  std::atomic<bool> stop_source{false};
+  std::thread source_thread([&] { source.run(*driver, stop_source); });
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
+  std::printf("vistel-client: joining room '%s' on %s as '%s'\n", room.c_str(), server_text.c_str(),
+              name.c_str());
+  std::fflush(stdout);
+
+  // Frame loop: sample every member at (server now - delay), render or just sample.
+  const double frame_interval = 1.0 / config->frame_rate_hz;
+  const auto start = Clock::now();
+  std::vector<FrameMember> members;
+  std::vector<MemberView> views;
+  std::unordered_map<std::string, std::shared_ptr<const AvatarModel>> models;
+  models[own_hash] = *own_avatar;
+  std::int64_t frame = 0;
+  int exit_code = 0;
+  while (!g_stop) {
+    const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+    if (duration > 0.0 && elapsed >= duration) break;
+    if (driver->state() == SessionState::kClosed) {
+      std::fprintf(stderr, "vistel-client: session ended: %s\n", driver->error().c_str());
+      exit_code = 1;
+      break;
+    }
+    // Copy the roster and postures out under the session lock.
+    driver->withSession([&](const ClientSession& s, double now) {
+      const double play_time = s.serverTime(now) - config->interpolation_delay_s;
+      members.resize(s.members().size());
+      for (std::size_t i = 0; i < members.size(); ++i) {
+        const RemoteMember& m = *s.members()[i];
+        FrameMember& f = members[i];
+        f.id = m.id;
+        f.name = m.name;
+        f.avatar_hash = m.avatar_hash;
+        f.seat = m.seat;
+        f.is_self = m.is_self;
+        f.has_posture = !m.is_self && m.buffer.sample(play_time, f.posture);
+      }
+      return 0;
+    });
+    // Draw (the view skins every avatar in its worker pool).
+    if (view) {
+      view->pollEvents();
+      if (view->shouldClose()) break;
+      views.resize(members.size());
+      for (std::size_t i = 0; i < members.size(); ++i) {
+        const FrameMember& f = members[i];
+        MemberView& v = views[i];
+        auto found = models.find(f.avatar_hash);
+        if (found == models.end()) {
+          if (auto model = cache->find(f.avatar_hash))
+            found = models.emplace(f.avatar_hash, model).first;
+        }
+        v.id = f.id;
+        v.name = f.name;
+        v.avatar = found != models.end() ? found->second : nullptr;
+        v.is_self = f.is_self;
+        v.placement = seatPlacement(f.seat);
+        if (f.is_self) {
+          v.posture = source.latest();
+        } else if (f.has_posture) {
+          v.posture = f.posture;
+        } else if (v.avatar) {
+          v.posture = restPosture(v.avatar->skeleton);
+        }
+      }
+      view->render(views);
+      if (!frames_dir.empty() && frame % frames_every == 0) {
+        const std::string path = fmt::format("{}/frame_{:05d}.png", frames_dir, frame);
+        if (Status st = view->saveFrame(path); !st) spdlog::warn("{}", st.error().message);
+      }
+    }
+    ++frame;
+    std::this_thread::sleep_until(start + seconds(static_cast<double>(frame) * frame_interval));
+  }
+
+  // Screenshot, stats, leave.
+  if (view && !screenshot.empty()) {
+    if (Status st = view->saveScreenshot(screenshot); !st) {
+      spdlog::error("{}", st.error().message);
+      exit_code = 1;
+    } else {
+      std::printf("vistel-client: screenshot written to %s\n", screenshot.c_str());
+    }
+  }
+  const int frames_rendered = view ? view->framesRendered() : 0;
+  const auto [json, summary] = driver->withSession([&](const ClientSession& s, double) {
+    std::string text =
+        statsJson(s.stats(), frames_rendered, s.clock().offset(), s.clock().roundTrip());
+    std::string line;
+    for (const auto& [member, m] : s.stats().members) {
+      line +=
+          fmt::format(" {}: {} postures at {:.1f} Hz;", member, m.postures_received, m.rateHz());
+    }
+    line +=
+        fmt::format(" latency mean {:.2f} ms, p99 {:.2f} ms; {} frames rendered",
+                    s.stats().latency.mean(), s.stats().latency.percentile(99.0), frames_rendered);
+    return std::make_pair(text, line);
+  });
+  if (!stats_path.empty()) {
+    if (Status st = writeFileText(stats_path, json); !st) {
+      spdlog::error("{}", st.error().message);
+      exit_code = 1;
+    }
+  }
+  std::printf("vistel-client:%s\n", summary.c_str());
+  std::fflush(stdout);
+
+  stop_source = true;
+  source_thread.join();
+  driver->stop("client exiting");
+  work.reset();
+  const auto deadline = Clock::now() + std::chrono::seconds(3);
+  while (!io.stopped() && Clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  io.stop();
+  network.join();
+  view.reset();
+  return exit_code;
+}

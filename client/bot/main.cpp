@@ -1,0 +1,211 @@
+// vistel-bot: headless participants replaying a motion clip (DESIGN.md §6: bots are
+// clients with no window whose source is a recording or a mocap clip).
+//
+//   vistel-bot --server HOST:PORT --room R --name N (--bvh FILE | --recording FILE)
+//              [--avatar FILE] [--loop] [--duration S] [--count K] [--config FILE]
+//
+// K participants (named N-1 .. N-K when K > 1, else N) join room R, each with the avatar
+// (default: default.vavatar in the data folder), and stream the clip retargeted onto
+// that avatar at the clip's own frame rate (at most the room's tick rate: faster would
+// only be dropped by the server's newest-wins). Ends at the clip's end (without
+// --loop), after --duration seconds, or on SIGINT/SIGTERM, leaving the room cleanly.
+// Never initialises GLFW. Exit status: 0, 1 on an error, 2 on bad usage.
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
+
+#include "client/net/asio.hpp"
+#include "client/net/client_config.hpp"
+#include "client/net/clip_player.hpp"
+#include "client/net/data_dir.hpp"
+#include "client/net/net_driver.hpp"
+#include "common/avatar/avatar_io.hpp"
+#include "common/base/file.hpp"
+#include "common/motion/bvh.hpp"
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+extern "C" void onSignal(int) { g_stop = true; }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace vistel;
+  using namespace vistel::net;
+
+  // Command line.
+  CLI::App app{"vistel-bot: headless participants replaying a motion clip"};
+  std::string server_text, room, name, bvh_path, recording_path, avatar_path;
+  std::string config_path = "config/client.toml";
+  bool loop = false;
+  double duration = 0.0;
+  int count = 1;
+  app.add_option("--server", server_text, "session server HOST:PORT")->required();
+  app.add_option("--room", room, "room to join")->required();
+  app.add_option("--name", name, "participant name (N-1..N-K with --count K > 1)")->required();
+  auto* bvh_opt = app.add_option("--bvh", bvh_path, "BVH motion clip to replay");
+  auto* rec_opt = app.add_option("--recording", recording_path, ".vrec sensor recording to replay");
+  bvh_opt->excludes(rec_opt);
+  app.add_option("--avatar", avatar_path, "avatar file (.vavatar; default: the data folder's)");
+  app.add_flag("--loop", loop, "replay the clip endlessly");
+  app.add_option("--duration", duration, "stop after this many seconds")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--count", count, "number of participants")->check(CLI::Range(1, 1000));
+  app.add_option("--config", config_path, "client settings (TOML); built-in defaults if absent");
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_default_logger(spdlog::stderr_color_mt("vistel-bot"));
+
+  if (bvh_opt->count() == 0 && rec_opt->count() == 0) {
+    std::fprintf(stderr, "vistel-bot: give a source: --bvh FILE or --recording FILE\n");
+    return 2;
+  }
+  if (rec_opt->count() > 0) {
+    // Sensor recordings (.vrec) need the sensor pipeline (common/sensors), not wired yet.
+    std::fprintf(stderr,
+                 "vistel-bot: --recording %s: replaying .vrec sensor recordings is not supported "
+                 "yet; use --bvh FILE\n",
+                 recording_path.c_str());
+    return 2;
+  }
+
+  // Settings, address, avatar, clip.
+  auto config = loadClientConfig(config_path);
+  if (!config) {
+    spdlog::error("{}", config.error().message);
+    return 1;
+  }
+  auto server = parseServerAddress(server_text);
+  if (!server) {
+    spdlog::error("{}", server.error().message);
+    return 2;
+  }
+  if (avatar_path.empty()) avatar_path = defaultAvatarPath();
+  auto avatar_bytes = readFileBytes(avatar_path, 1u << 30);
+  if (!avatar_bytes) {
+    spdlog::error("avatar: {}", avatar_bytes.error().message);
+    return 1;
+  }
+  auto avatar = decodeAvatar(*avatar_bytes, avatar_path);
+  if (!avatar) {
+    spdlog::error("{}", avatar.error().message);
+    return 1;
+  }
+  auto clip = loadBvh(bvh_path);
+  if (!clip) {
+    spdlog::error("{}", clip.error().message);
+    return 1;
+  }
+
+  // One player per participant (players keep scratch state).
+  std::vector<std::unique_ptr<ClipPlayer>> players;
+  for (int i = 0; i < count; ++i) {
+    auto player = ClipPlayer::create(*clip, avatar->skeleton);
+    if (!player) {
+      spdlog::error("{}", player.error().message);
+      return 1;
+    }
+    players.push_back(std::move(*player));
+  }
+  const double clip_rate = 1.0 / players[0]->frameTime();
+
+  // Participants: one driver each, all on one network thread.
+  SessionSettings settings = config->session;
+  settings.room = room;
+  settings.avatar_hash = avatarContentHash(*avatar_bytes);
+  settings.avatar_bytes =
+      std::make_shared<const std::vector<std::uint8_t>>(std::move(*avatar_bytes));
+  settings.avatar_joint_count = avatar->skeleton.jointCount();
+  settings.fetch_avatars = false;  // bots draw nothing
+  std::printf(
+      "vistel-bot: %d participant(s) joining room '%s' on %s, replaying %s (%.1f s at "
+      "%.0f Hz%s)\n",
+      count, room.c_str(), server_text.c_str(), clip->source.c_str(), players[0]->duration(),
+      clip_rate, players[0]->retargeted() ? ", retargeted" : "");
+  std::fflush(stdout);
+  asio::io_context io;
+  auto work = asio::make_work_guard(io);
+  std::vector<std::shared_ptr<NetDriver>> drivers;
+  std::vector<std::string> names;
+  for (int i = 0; i < count; ++i) {
+    settings.name = count > 1 ? name + "-" + std::to_string(i + 1) : name;
+    names.push_back(settings.name);
+    drivers.push_back(NetDriver::create(io, *server, settings, nullptr));
+    drivers.back()->start();
+  }
+  std::thread network([&io] { io.run(); });
+
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
+
+  // The source loop: every participant's posture at each frame time, paced on the
+  // steady clock (the send rate is fixed once the server's tick rate is known).
+  const auto start = std::chrono::steady_clock::now();
+  double interval = 1.0 / clip_rate;
+  bool rate_fixed = false;
+  Posture posture;
+  std::int64_t frame = 0;
+  int exit_code = 0;
+  while (!g_stop) {
+    const double t = static_cast<double>(frame) * interval;
+    if (duration > 0.0 && t >= duration) break;
+    if (!loop && t > players[0]->duration() + 1e-9) break;
+    std::this_thread::sleep_until(start +
+                                  std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                      std::chrono::duration<double>(t)));
+    // Once live: cap the rate at the room's tick rate.
+    if (!rate_fixed && drivers[0]->state() == SessionState::kLive) {
+      const double tick =
+          drivers[0]->withSession([](const ClientSession& s, double) { return s.tickRateHz(); });
+      if (tick > 0.0 && clip_rate > tick) {
+        interval = 1.0 / tick;
+        frame = static_cast<std::int64_t>(t / interval);
+      }
+      rate_fixed = true;
+      spdlog::info("sending {:.1f} postures/s per participant", 1.0 / interval);
+    }
+    // Send; stop when every participant's session has ended.
+    int open = 0;
+    for (int i = 0; i < count; ++i) {
+      if (drivers[static_cast<std::size_t>(i)]->state() == SessionState::kClosed) continue;
+      ++open;
+      players[static_cast<std::size_t>(i)]->sample(t, loop, posture);
+      drivers[static_cast<std::size_t>(i)]->sendPosture(posture);
+    }
+    if (open == 0) break;
+    ++frame;
+  }
+
+  // Leave cleanly, report, and wait for the network thread (bounded).
+  for (std::size_t i = 0; i < drivers.size(); ++i) {
+    const std::string error = drivers[i]->error();
+    const auto sent = drivers[i]->withSession(
+        [](const ClientSession& s, double) { return s.stats().postures_sent; });
+    if (drivers[i]->state() == SessionState::kClosed && !error.empty()) {
+      std::fprintf(stderr, "vistel-bot: %s: %s\n", names[i].c_str(), error.c_str());
+      exit_code = 1;
+    }
+    std::printf("vistel-bot: %s sent %llu postures\n", names[i].c_str(),
+                static_cast<unsigned long long>(sent));
+    drivers[i]->stop("bot finished");
+  }
+  std::fflush(stdout);
+  work.reset();
+  auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+  while (!io.stopped() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  io.stop();
+  network.join();
+  return exit_code;
+}

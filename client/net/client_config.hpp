@@ -1,0 +1,38 @@
+// Settings of the site client and the bots, from TOML (config/client.toml, compiled in
+// as the default). Every key is optional; unknown keys and out-of-range values are
+// errors naming the source and the key.
+#pragma once
+
+#include <string>
+#include <string_view>
+
+#include "client/net/client_session.hpp"
+#include "common/base/result.hpp"
+
+namespace vistel::net {
+
+struct ClientConfig {
+  // [network] and [playback]: how sessions behave (room, name and avatar are set by
+  // the program).
+  SessionSettings session;
+  double interpolation_delay_s = 0.1;  // remote postures play this far behind server now
+  // [source]
+  double idle_rate_hz = 30.0;  // own postures per second when the source has no rate
+  // [avatars]
+  std::string cache_dir;  // "" = $XDG_CACHE_HOME/vistel/avatars or ~/.cache/vistel/avatars
+  // [view]
+  int width = 1280;
+  int height = 720;
+  int worker_threads = 2;
+  double frame_rate_hz = 60.0;  // render (or headless sampling) rate
+};
+
+Result<ClientConfig> parseClientConfig(std::string_view toml_text, std::string_view source_name);
+// readConfigText(path) + parseClientConfig ("config/client.toml" falls back to the
+// embedded copy).
+Result<ClientConfig> loadClientConfig(const std::string& path);
+
+// The avatar cache folder to use for a config value ("" = the user's cache folder).
+std::string avatarCacheFolder(const std::string& configured);
+
+}  // namespace vistel::net

@@ -1,0 +1,402 @@
+#include "client/net/client_session.hpp"
+
+#include <algorithm>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "control.pb.h"
+
+namespace vistel::net {
+namespace {
+
+constexpr std::size_t kPendingPings = 16;
+
+}  // namespace
+
+const char* sessionStateName(SessionState state) {
+  switch (state) {
+    case SessionState::kJoining:
+      return "joining";
+    case SessionState::kHandshaking:
+      return "handshaking";
+    case SessionState::kLive:
+      return "live";
+    case SessionState::kClosed:
+      return "closed";
+  }
+  return "?";
+}
+
+ClientSession::ClientSession(SessionSettings settings, std::shared_ptr<AvatarCache> cache)
+    : settings_(std::move(settings)),
+      cache_(std::move(cache)),
+      decoder_(settings_.max_frame_bytes),
+      clock_(settings_.clock_window) {}
+
+ClientSession::~ClientSession() = default;
+
+void ClientSession::sendControl(const std::string& payload) {
+  wire::appendFrame(
+      std::span(reinterpret_cast<const std::uint8_t*>(payload.data()), payload.size()),
+      outbox_.stream);
+}
+
+void ClientSession::close(const std::string& reason) {
+  if (state_ == SessionState::kClosed) return;
+  state_ = SessionState::kClosed;
+  error_ = reason;
+  outbox_.close = true;
+}
+
+void ClientSession::start(double now) {
+  state_ = SessionState::kJoining;
+  state_since_ = now;
+  control::ClientMessage msg;
+  control::Join& join = *msg.mutable_join();
+  join.set_protocol_version(kProtocolVersion);
+  join.set_room(settings_.room);
+  join.set_name(settings_.name);
+  join.set_avatar_hash(settings_.avatar_hash);
+  join.set_avatar_size(settings_.avatar_bytes ? settings_.avatar_bytes->size() : 0);
+  sendControl(msg.SerializeAsString());
+}
+
+void ClientSession::leave(const std::string& reason) {
+  if (state_ == SessionState::kClosed) return;
+  control::ClientMessage msg;
+  msg.mutable_leave()->set_reason(reason);
+  sendControl(msg.SerializeAsString());
+  close("left: " + reason);
+  error_.clear();
+}
+
+// ---------------------------------------------------------------- TCP
+
+void ClientSession::onStreamBytes(std::span<const std::uint8_t> bytes, double now) {
+  if (state_ == SessionState::kClosed) return;
+  if (!decoder_.push(bytes)) {
+    close("server stream: " + decoder_.error());
+    return;
+  }
+  while (state_ != SessionState::kClosed) {
+    auto payload = decoder_.next();
+    if (!payload) {
+      if (decoder_.broken()) close("server stream: " + decoder_.error());
+      return;
+    }
+    control::ServerMessage msg;
+    if (!msg.ParseFromArray(payload->data(), static_cast<int>(payload->size())) ||
+        msg.body_case() == control::ServerMessage::BODY_NOT_SET) {
+      close(fmt::format("server sent an unparsable control message ({} bytes)", payload->size()));
+      return;
+    }
+    handleMessage(msg, now);
+  }
+}
+
+void ClientSession::handleMessage(const control::ServerMessage& msg, double now) {
+  switch (msg.body_case()) {
+    case control::ServerMessage::kWelcome: {
+      const control::Welcome& w = msg.welcome();
+      if (state_ != SessionState::kJoining || w.member_id() == 0 ||
+          !(w.tick_rate_hz() > 0.0 && w.tick_rate_hz() <= 1000.0)) {
+        close("server sent an unexpected or invalid Welcome");
+        return;
+      }
+      member_id_ = w.member_id();
+      key_ = w.udp_key();
+      tick_rate_hz_ = w.tick_rate_hz();
+      clock_.seed(w.server_time(), now);
+      spdlog::info("joined room '{}' as member {:#x} ({} Hz ticks)", w.room(), member_id_,
+                   tick_rate_hz_);
+      if (w.upload_avatar()) {
+        avatar_pending_ = true;  // postures wait until the server has the avatar
+        uploadAvatar(std::clamp<std::size_t>(w.max_chunk_bytes(), 256, 1u << 20));
+      }
+      // Start the UDP handshake at once.
+      state_ = SessionState::kHandshaking;
+      state_since_ = now;
+      next_hello_ = now;
+      sendHello(now);
+      return;
+    }
+    case control::ServerMessage::kRoster:
+      handleRoster(msg.roster());
+      return;
+    case control::ServerMessage::kAvatarChunk:
+      handleChunk(msg.avatar_chunk());
+      return;
+    case control::ServerMessage::kAvatarAccepted:
+      if (msg.avatar_accepted().hash() == settings_.avatar_hash) avatar_pending_ = false;
+      spdlog::info("server accepted our avatar {}", msg.avatar_accepted().hash().substr(0, 12));
+      return;
+    case control::ServerMessage::kAvatarMissing: {
+      auto it = downloads_.find(msg.avatar_missing().hash());
+      if (it != downloads_.end()) downloads_.erase(it);  // retried on the next roster
+      return;
+    }
+    case control::ServerMessage::kError:
+      close(fmt::format("server: {}: {}", control::ErrorReply::Code_Name(msg.error().code()),
+                        msg.error().message()));
+      return;
+    case control::ServerMessage::BODY_NOT_SET:
+      return;
+  }
+}
+
+void ClientSession::uploadAvatar(std::size_t chunk_bytes) {
+  if (!settings_.avatar_bytes || settings_.avatar_bytes->empty()) {
+    close("the server asks for our avatar but we have no avatar file");
+    return;
+  }
+  const std::vector<std::uint8_t>& bytes = *settings_.avatar_bytes;
+  control::ClientMessage msg;
+  control::AvatarChunk& chunk = *msg.mutable_avatar_chunk();
+  chunk.set_hash(settings_.avatar_hash);
+  chunk.set_total_size(bytes.size());
+  for (std::size_t offset = 0; offset < bytes.size(); offset += chunk_bytes) {
+    const std::size_t n = std::min(chunk_bytes, bytes.size() - offset);
+    chunk.set_offset(offset);
+    chunk.set_data(reinterpret_cast<const char*>(bytes.data() + offset), n);
+    sendControl(msg.SerializeAsString());
+  }
+  spdlog::info("uploading our avatar ({} bytes)", bytes.size());
+}
+
+void ClientSession::handleRoster(const control::Roster& roster) {
+  // Rebuild the list in the server's order, keeping existing members' buffers.
+  std::vector<std::unique_ptr<RemoteMember>> next;
+  for (const control::MemberInfo& info : roster.members()) {
+    std::unique_ptr<RemoteMember> m;
+    for (auto& old : members_) {
+      if (old && old->id == info.member_id()) m = std::move(old);
+    }
+    if (!m) {
+      m = std::make_unique<RemoteMember>();
+      m->buffer = JitterBuffer(settings_.jitter_capacity);
+      if (info.member_id() != member_id_) {
+        spdlog::info("member '{}' ({:#x}) is in the room", info.name(), info.member_id());
+      }
+    }
+    m->id = info.member_id();
+    m->name = info.name();
+    m->avatar_hash = info.avatar_hash();
+    const int joints = static_cast<int>(std::min<std::uint32_t>(info.joint_count(), 255));
+    if (joints != m->joint_count) m->buffer.clear();
+    m->joint_count = joints;
+    m->avatar_ready = info.avatar_ready();
+    m->seat = Seat{info.seat().x(), info.seat().z(), info.seat().yaw()};
+    m->is_self = m->id == member_id_;
+    next.push_back(std::move(m));
+  }
+  for (auto& old : members_) {
+    if (old) spdlog::info("member '{}' ({:#x}) left the room", old->name, old->id);
+  }
+  members_ = std::move(next);
+  ++roster_version_;
+  requestMissingAvatars();
+}
+
+void ClientSession::requestMissingAvatars() {
+  if (!cache_ || !settings_.fetch_avatars) return;
+  for (const auto& m : members_) {
+    if (m->is_self || !m->avatar_ready || downloads_.count(m->avatar_hash)) continue;
+    if (cache_->find(m->avatar_hash)) continue;
+    downloads_[m->avatar_hash] = Download{};
+    control::ClientMessage msg;
+    msg.mutable_avatar_request()->set_hash(m->avatar_hash);
+    sendControl(msg.SerializeAsString());
+    spdlog::info("fetching avatar {} of '{}'", m->avatar_hash.substr(0, 12), m->name);
+  }
+}
+
+void ClientSession::handleChunk(const control::AvatarChunk& chunk) {
+  auto it = downloads_.find(chunk.hash());
+  if (it == downloads_.end() || it->second.failed) return;  // not asked for
+  Download& d = it->second;
+  // The chunks must continue one file of a sane size.
+  if (d.bytes.empty()) d.total = chunk.total_size();
+  if (chunk.total_size() != d.total || d.total == 0 || d.total > settings_.max_avatar_bytes ||
+      chunk.offset() != d.bytes.size() || chunk.data().empty() ||
+      d.bytes.size() + chunk.data().size() > d.total) {
+    spdlog::warn("avatar {}: inconsistent chunk from the server (offset {}, {} bytes of {})",
+                 chunk.hash().substr(0, 12), chunk.offset(), chunk.data().size(),
+                 chunk.total_size());
+    d.failed = true;
+    d.bytes.clear();
+    return;
+  }
+  d.bytes.insert(d.bytes.end(), chunk.data().begin(), chunk.data().end());
+  if (d.bytes.size() < d.total) return;
+  auto model = cache_->insert(chunk.hash(), d.bytes);
+  d.bytes = {};
+  if (!model) {
+    spdlog::warn("{}", model.error().message);
+    d.failed = true;
+    return;
+  }
+  spdlog::info("avatar {} received ({} joints)", chunk.hash().substr(0, 12),
+               (*model)->skeleton.jointCount());
+}
+
+void ClientSession::onDisconnected(const std::string& reason, double /*now*/) {
+  if (state_ != SessionState::kClosed) close("disconnected: " + reason);
+}
+
+// ---------------------------------------------------------------- UDP
+
+void ClientSession::sendHello(double now) {
+  wire::HelloPacket hello;
+  hello.header.member_id = member_id_;
+  hello.header.key = key_;
+  hello.attempt = ++hello_attempt_;
+  wire::write(hello, outbox_.datagrams.emplace_back());
+  next_hello_ = now + settings_.hello_interval_s;
+}
+
+void ClientSession::sendPing(double now) {
+  wire::PingPacket ping;
+  ping.header.member_id = member_id_;
+  ping.header.key = key_;
+  ping.ping_id = ++ping_id_;
+  ping.client_time = now;
+  wire::write(ping, outbox_.datagrams.emplace_back());
+  if (pending_pings_.size() >= kPendingPings) pending_pings_.erase(pending_pings_.begin());
+  pending_pings_.emplace_back(ping.ping_id, now);
+  const bool fast = static_cast<int>(ping_id_) < settings_.fast_pings;
+  next_ping_ = now + (fast ? settings_.fast_ping_interval_s : settings_.ping_interval_s);
+}
+
+void ClientSession::onDatagram(std::span<const std::uint8_t> datagram, double now) {
+  if (state_ != SessionState::kHandshaking && state_ != SessionState::kLive) return;
+  const auto type = wire::peekPacketType(datagram);
+  if (type == wire::PacketType::kHelloAck) {
+    wire::HelloAckPacket ack;
+    if (!wire::read(datagram, ack) || ack.member_id != member_id_) {
+      ++stats_.datagrams_rejected;
+      return;
+    }
+    last_server_datagram_ = now;
+    if (state_ == SessionState::kHandshaking) {
+      state_ = SessionState::kLive;
+      state_since_ = now;
+      next_ping_ = now;
+      spdlog::info("UDP handshake done after {} hello(s)", hello_attempt_);
+    }
+  } else if (type == wire::PacketType::kPong) {
+    wire::PongPacket pong;
+    if (!wire::read(datagram, pong)) {
+      ++stats_.datagrams_rejected;
+      return;
+    }
+    // Only answers to our own recent pings count.
+    auto it = std::find_if(pending_pings_.begin(), pending_pings_.end(),
+                           [&](const auto& p) { return p.first == pong.ping_id; });
+    if (it == pending_pings_.end() || it->second != pong.client_time) {
+      ++stats_.datagrams_rejected;
+      return;
+    }
+    pending_pings_.erase(it);
+    last_server_datagram_ = now;
+    clock_.addSample(pong.client_time, pong.server_time, now);
+  } else if (type == wire::PacketType::kSnapshot) {
+    handleSnapshot(datagram, now);
+  } else {
+    ++stats_.datagrams_rejected;
+  }
+}
+
+void ClientSession::handleSnapshot(std::span<const std::uint8_t> datagram, double now) {
+  if (!wire::readSnapshot(datagram, snapshot_header_, snapshot_entries_)) {
+    ++stats_.datagrams_rejected;
+    return;
+  }
+  last_server_datagram_ = now;
+  ++stats_.snapshots_received;
+  for (const wire::SnapshotEntry& e : snapshot_entries_) {
+    // Only roster members, with the joint count their avatar has.
+    RemoteMember* m = nullptr;
+    for (auto& candidate : members_) {
+      if (candidate->id == e.member_id) m = candidate.get();
+    }
+    if (m == nullptr || m->is_self || e.record.joint_count != m->joint_count) continue;
+    wire::decodePostureRecord(e.record, snapshot_header_.server_time, scratch_posture_);
+    if (m->buffer.push(e.record.sequence, scratch_posture_) != JitterBuffer::Push::kAccepted) {
+      continue;
+    }
+    // Stats: distinct postures per sender; latency once the clock is measured.
+    MemberReceiveStats& s = stats_.members[m->name];
+    if (s.postures_received == 0) s.first_arrival = now;
+    s.last_arrival = now;
+    ++s.postures_received;
+    if (clock_.synced()) {
+      stats_.latency.add((clock_.serverTime(now) - scratch_posture_.time) * 1e3);
+    }
+  }
+}
+
+bool ClientSession::sendPosture(const Posture& posture, double now) {
+  if (state_ != SessionState::kLive || avatar_pending_) return false;
+  if (settings_.avatar_joint_count > 0 &&
+      static_cast<int>(posture.rotations.size()) != settings_.avatar_joint_count) {
+    return false;
+  }
+  wire::PosturePacket& p = scratch_packet_;
+  p.header.member_id = member_id_;
+  p.header.key = key_;
+  if (!wire::encodePostureRecord(posture, ++sequence_, clock_.serverTime(now), p.record)) {
+    return false;
+  }
+  wire::write(p, outbox_.datagrams.emplace_back());
+  ++stats_.postures_sent;
+  return true;
+}
+
+// ---------------------------------------------------------------- timers
+
+void ClientSession::update(double now) {
+  switch (state_) {
+    case SessionState::kJoining:
+      if (now - state_since_ > settings_.join_timeout_s) {
+        close(fmt::format("no Welcome from the server within {:.0f} s", settings_.join_timeout_s));
+      }
+      break;
+    case SessionState::kHandshaking:
+      if (now - state_since_ > settings_.hello_timeout_s) {
+        close(
+            fmt::format("UDP handshake timed out after {} hellos ({:.0f} s): is UDP to the "
+                        "server's port blocked?",
+                        hello_attempt_, settings_.hello_timeout_s));
+      } else if (now >= next_hello_) {
+        sendHello(now);
+      }
+      break;
+    case SessionState::kLive:
+      if (now - last_server_datagram_ > settings_.server_timeout_s) {
+        close(
+            fmt::format("no UDP traffic from the server for {:.0f} s", settings_.server_timeout_s));
+      } else if (now >= next_ping_) {
+        sendPing(now);
+      }
+      break;
+    case SessionState::kClosed:
+      break;
+  }
+}
+
+// ---------------------------------------------------------------- queries
+
+const RemoteMember* ClientSession::findMember(std::uint32_t id) const {
+  for (const auto& m : members_) {
+    if (m->id == id) return m.get();
+  }
+  return nullptr;
+}
+
+bool ClientSession::samplePosture(std::uint32_t member_id, double server_time, Posture& out) const {
+  const RemoteMember* m = findMember(member_id);
+  return m != nullptr && m->buffer.sample(server_time, out);
+}
+
+}  // namespace vistel::net

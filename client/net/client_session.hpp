@@ -1,0 +1,189 @@
+// The client's side of a session as a pure state machine (proto/SESSION.md §4): fed
+// (bytes, now) from the TCP stream and the UDP socket, it decides what to send, and
+// keeps the roster, a jitter buffer per remote member, the clock offset and the stats.
+// No sockets, clocks or threads: NetDriver runs it over Asio; tests run it over a
+// simulated network. `now` is the caller's monotonic clock in seconds throughout.
+//
+// States: kJoining (Join sent, waiting for the Welcome; the avatar is uploaded here if
+// the server asks) -> kHandshaking (UDP hellos every hello_interval_s until acked) ->
+// kLive (postures out, snapshots in, pings for the clock) -> kClosed (error() says why:
+// a server ErrorReply, a disconnect, a handshake timeout, server silence, a protocol
+// violation). Input that breaks the protocol from the server closes the session with a
+// message; malformed datagrams are only counted.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "client/net/avatar_cache.hpp"
+#include "client/net/clock_sync.hpp"
+#include "client/net/jitter_buffer.hpp"
+#include "client/net/session_stats.hpp"
+#include "common/anim/posture.hpp"
+#include "common/wire/framing.hpp"
+#include "common/wire/packets.hpp"
+
+namespace vistel::control {
+class ServerMessage;
+class Roster;
+class AvatarChunk;
+}  // namespace vistel::control
+
+namespace vistel::net {
+
+inline constexpr std::uint32_t kProtocolVersion = 1;
+
+struct SessionSettings {
+  std::string room;
+  std::string name;
+  // The participant's avatar file and its hash (avatarContentHash); its joint count is
+  // what every posture sent must carry (0 = not checked here).
+  std::shared_ptr<const std::vector<std::uint8_t>> avatar_bytes;
+  std::string avatar_hash;
+  int avatar_joint_count = 0;
+
+  double hello_interval_s = 0.1;
+  double hello_timeout_s = 5.0;  // kHandshaking longer than this: closed
+  double join_timeout_s = 10.0;  // kJoining longer than this (upload included): closed
+  double ping_interval_s = 1.0;
+  int fast_pings = 10;  // the first pings go out faster, to converge quickly
+  double fast_ping_interval_s = 0.05;
+  int clock_window = 16;                     // ClockSync window
+  double server_timeout_s = 10.0;            // no datagram from the server this long: closed
+  int jitter_capacity = 32;                  // postures kept per remote member
+  std::size_t max_frame_bytes = 1u << 20;    // control frames accepted from the server
+  std::size_t max_avatar_bytes = 64u << 20;  // avatar files accepted from the server
+  bool fetch_avatars = true;                 // request unknown avatars (needs a cache)
+};
+
+enum class SessionState { kJoining, kHandshaking, kLive, kClosed };
+const char* sessionStateName(SessionState state);
+
+struct Seat {
+  float x = 0.0f;
+  float z = 0.0f;
+  float yaw = 0.0f;  // radians about +Y
+};
+
+// A roster entry, with its stream state.
+struct RemoteMember {
+  std::uint32_t id = 0;
+  std::string name;
+  std::string avatar_hash;
+  int joint_count = 0;  // of its avatar (0 until the server has it)
+  bool avatar_ready = false;
+  Seat seat;
+  bool is_self = false;
+  JitterBuffer buffer;  // its postures, server clock (empty for self)
+};
+
+// What the session wants sent; the driver (or test) takes it and clears it.
+struct SessionOutbox {
+  std::vector<std::uint8_t> stream;                  // bytes for the TCP stream, in order
+  std::vector<std::vector<std::uint8_t>> datagrams;  // UDP payloads for the server
+  bool close = false;                                // close the TCP connection after `stream`
+  void clear() {
+    stream.clear();
+    datagrams.clear();
+    close = false;
+  }
+};
+
+class ClientSession {
+ public:
+  // cache may be null (then avatars are not fetched). Call start() once connected.
+  ClientSession(SessionSettings settings, std::shared_ptr<AvatarCache> cache);
+  ~ClientSession();
+
+  // The TCP connection is up: sends Join.
+  void start(double now);
+  void onStreamBytes(std::span<const std::uint8_t> bytes, double now);
+  // A datagram from the server's endpoint (the driver filters other senders).
+  void onDatagram(std::span<const std::uint8_t> datagram, double now);
+  void onDisconnected(const std::string& reason, double now);
+  // Timers: hello retries, pings, timeouts. Call often (every few ms to 50 ms).
+  void update(double now);
+
+  // Sends the participant's posture, stamped with the server time of `now`. Only in
+  // kLive once the server holds our avatar (else false, nothing sent); false as well
+  // when its joint count is not the avatar's. Allocates only the datagram.
+  bool sendPosture(const Posture& posture, double now);
+  // Sends Leave and asks the driver to close; the state becomes kClosed.
+  void leave(const std::string& reason);
+
+  SessionState state() const { return state_; }
+  const std::string& error() const { return error_; }
+  std::uint32_t memberId() const { return member_id_; }
+  double tickRateHz() const { return tick_rate_hz_; }
+  const ClockSync& clock() const { return clock_; }
+  double serverTime(double now) const { return clock_.serverTime(now); }
+  // The roster, self included, in the server's order.
+  const std::vector<std::unique_ptr<RemoteMember>>& members() const { return members_; }
+  const RemoteMember* findMember(std::uint32_t id) const;
+  // The posture of a remote member at a server time (see JitterBuffer::sample).
+  bool samplePosture(std::uint32_t member_id, double server_time, Posture& out) const;
+  const SessionStats& stats() const { return stats_; }
+  // Increments whenever the roster changes (for callers that rebuild views).
+  std::uint64_t rosterVersion() const { return roster_version_; }
+
+  SessionOutbox& outbox() { return outbox_; }
+
+ private:
+  struct Download {
+    std::vector<std::uint8_t> bytes;
+    std::uint64_t total = 0;
+    bool failed = false;
+  };
+
+  void handleMessage(const control::ServerMessage& msg, double now);
+  void handleRoster(const control::Roster& roster);
+  void handleChunk(const control::AvatarChunk& chunk);
+  void handleSnapshot(std::span<const std::uint8_t> datagram, double now);
+  void uploadAvatar(std::size_t chunk_bytes);
+  void requestMissingAvatars();
+  void sendHello(double now);
+  void sendPing(double now);
+  void sendControl(const std::string& payload);
+  void close(const std::string& reason);
+
+  SessionSettings settings_;
+  std::shared_ptr<AvatarCache> cache_;
+  SessionState state_ = SessionState::kJoining;
+  std::string error_;
+  wire::FrameDecoder decoder_;
+  SessionOutbox outbox_;
+
+  std::uint32_t member_id_ = 0;
+  std::uint64_t key_ = 0;
+  double tick_rate_hz_ = 0.0;
+  bool avatar_pending_ = false;  // uploaded, not yet accepted
+  double state_since_ = 0.0;
+  double last_server_datagram_ = 0.0;
+
+  std::uint32_t hello_attempt_ = 0;
+  double next_hello_ = 0.0;
+
+  std::uint32_t ping_id_ = 0;
+  double next_ping_ = 0.0;
+  std::vector<std::pair<std::uint32_t, double>> pending_pings_;  // (id, t0), recent
+  ClockSync clock_;
+
+  std::uint16_t sequence_ = 0;
+  std::vector<std::unique_ptr<RemoteMember>> members_;
+  std::uint64_t roster_version_ = 0;
+  std::unordered_map<std::string, Download> downloads_;  // by hash
+
+  SessionStats stats_;
+  // Scratch, reused per datagram.
+  wire::SnapshotHeader snapshot_header_;
+  std::vector<wire::SnapshotEntry> snapshot_entries_;
+  Posture scratch_posture_;
+  wire::PosturePacket scratch_packet_;
+};
+
+}  // namespace vistel::net

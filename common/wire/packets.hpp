@@ -1,0 +1,183 @@
+// The UDP datagrams of a session (proto/WIRE.md §3), each with one serialize function
+// used to read, write and measure it.
+//
+// Client -> server datagrams start with the 14-byte client header (version, type, member
+// id, key); server -> client datagrams with version and type only. Readers accept a
+// datagram only when it has the current version, the expected type, every field in
+// range, and no bytes left over; anything else is rejected (false) without side effects
+// on the caller's state beyond the output struct.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "common/wire/bit_stream.hpp"
+#include "common/wire/posture_codec.hpp"
+
+namespace vistel::wire {
+
+inline constexpr std::uint8_t kWireVersion = 1;
+// Largest UDP payload either side sends (stays below common path MTUs). Readers reject
+// anything larger.
+inline constexpr std::size_t kMaxDatagramBytes = 1200;
+inline constexpr std::size_t kClientHeaderBytes = 14;
+inline constexpr std::size_t kSnapshotHeaderBytes = 15;
+inline constexpr std::size_t kSnapshotEntryOverhead = 4;  // member id before each record
+
+enum class PacketType : std::uint8_t {
+  kHello = 0x01,     // client -> server: bind this endpoint to (member id, key)
+  kPosture = 0x02,   // client -> server: the sender's newest posture
+  kPing = 0x03,      // client -> server: clock-offset probe
+  kHelloAck = 0x81,  // server -> client: endpoint bound
+  kSnapshot = 0x82,  // server -> client: other members' newest postures
+  kPong = 0x83,      // server -> client: answer to a ping with the server's clock
+};
+
+struct ClientHeader {
+  std::uint32_t member_id = 0;
+  std::uint64_t key = 0;  // the member's UDP key from the Welcome
+};
+
+struct HelloPacket {
+  ClientHeader header;
+  std::uint32_t attempt = 0;  // the client's hello counter, echoed in the ack
+};
+
+struct PosturePacket {
+  ClientHeader header;
+  PostureRecord record;
+};
+
+struct PingPacket {
+  ClientHeader header;
+  std::uint32_t ping_id = 0;
+  double client_time = 0.0;  // sender's clock, seconds (echoed)
+};
+
+struct HelloAckPacket {
+  std::uint32_t member_id = 0;
+  std::uint32_t attempt = 0;
+};
+
+struct PongPacket {
+  std::uint32_t ping_id = 0;
+  double client_time = 0.0;  // echoed from the ping
+  double server_time = 0.0;  // server clock when the ping was handled, seconds
+};
+
+struct SnapshotHeader {
+  std::uint32_t tick = 0;    // room tick counter
+  double server_time = 0.0;  // server clock at the tick, seconds
+  std::uint8_t entry_count = 0;
+};
+
+struct SnapshotEntry {
+  std::uint32_t member_id = 0;
+  PostureRecord record;
+};
+
+// ----- serialize functions (read, write, measure) -----
+
+template <typename Stream>
+bool serializeKind(Stream& s, PacketType type) {
+  std::uint8_t version = kWireVersion;
+  auto kind = static_cast<std::uint8_t>(type);
+  if (!serializeU8(s, version) || !serializeU8(s, kind)) return false;
+  return version == kWireVersion && kind == static_cast<std::uint8_t>(type);
+}
+
+template <typename Stream>
+bool serialize(Stream& s, ClientHeader& h, PacketType type) {
+  return serializeKind(s, type) && serializeU32(s, h.member_id) && serializeU64(s, h.key);
+}
+
+template <typename Stream>
+bool serialize(Stream& s, HelloPacket& p) {
+  return serialize(s, p.header, PacketType::kHello) && serializeU32(s, p.attempt);
+}
+
+template <typename Stream>
+bool serialize(Stream& s, PosturePacket& p) {
+  return serialize(s, p.header, PacketType::kPosture) && serialize(s, p.record);
+}
+
+template <typename Stream>
+bool serialize(Stream& s, PingPacket& p) {
+  return serialize(s, p.header, PacketType::kPing) && serializeU32(s, p.ping_id) &&
+         serializeF64(s, p.client_time);
+}
+
+template <typename Stream>
+bool serialize(Stream& s, HelloAckPacket& p) {
+  return serializeKind(s, PacketType::kHelloAck) && serializeU32(s, p.member_id) &&
+         serializeU32(s, p.attempt);
+}
+
+template <typename Stream>
+bool serialize(Stream& s, PongPacket& p) {
+  return serializeKind(s, PacketType::kPong) && serializeU32(s, p.ping_id) &&
+         serializeF64(s, p.client_time) && serializeF64(s, p.server_time);
+}
+
+template <typename Stream>
+bool serialize(Stream& s, SnapshotHeader& h) {
+  return serializeKind(s, PacketType::kSnapshot) && serializeU32(s, h.tick) &&
+         serializeF64(s, h.server_time) && serializeU8(s, h.entry_count);
+}
+
+template <typename Stream>
+bool serialize(Stream& s, SnapshotEntry& e) {
+  return serializeU32(s, e.member_id) && serialize(s, e.record);
+}
+
+// ----- whole datagrams -----
+
+// The packet type of a datagram with the current version, or nullopt (wrong version,
+// unknown type, too short or too long). Cheap: for routing before a full read.
+std::optional<PacketType> peekPacketType(std::span<const std::uint8_t> datagram);
+// The member id of a client -> server datagram (bytes 2..5), or nullopt when shorter
+// than the client header.
+std::optional<std::uint32_t> peekMemberId(std::span<const std::uint8_t> datagram);
+
+// Appends the datagram's bytes to out.
+void write(const HelloPacket& p, std::vector<std::uint8_t>& out);
+void write(const PosturePacket& p, std::vector<std::uint8_t>& out);
+void write(const PingPacket& p, std::vector<std::uint8_t>& out);
+void write(const HelloAckPacket& p, std::vector<std::uint8_t>& out);
+void write(const PongPacket& p, std::vector<std::uint8_t>& out);
+
+// Reads a whole datagram: true only when it is exactly one valid message of that type.
+bool read(std::span<const std::uint8_t> datagram, HelloPacket& out);
+bool read(std::span<const std::uint8_t> datagram, PosturePacket& out);
+bool read(std::span<const std::uint8_t> datagram, PingPacket& out);
+bool read(std::span<const std::uint8_t> datagram, HelloAckPacket& out);
+bool read(std::span<const std::uint8_t> datagram, PongPacket& out);
+
+// Serialized size in bytes.
+std::size_t measure(const HelloPacket& p);
+std::size_t measure(const PosturePacket& p);
+std::size_t measure(const PingPacket& p);
+std::size_t measure(const HelloAckPacket& p);
+std::size_t measure(const PongPacket& p);
+std::size_t measure(const SnapshotEntry& e);
+
+// Serialized bytes of a posture record alone (what a server keeps per member and copies
+// into snapshots).
+void writeRecord(const PostureRecord& record, std::vector<std::uint8_t>& out);
+
+// Snapshots are built incrementally: a header, then entries of a member id and the
+// record's bytes, then the count patched in. `out` must be empty at begin.
+void beginSnapshot(const SnapshotHeader& header, std::vector<std::uint8_t>& out);
+void appendSnapshotEntry(std::uint32_t member_id, std::span<const std::uint8_t> record_bytes,
+                         std::vector<std::uint8_t>& out);
+void finishSnapshot(std::uint8_t entry_count, std::vector<std::uint8_t>& out);
+
+// Reads a whole snapshot datagram into header and entries (resized; reuse the vector
+// to avoid allocating per packet). All or nothing: false if any entry is malformed or
+// bytes are left over.
+bool readSnapshot(std::span<const std::uint8_t> datagram, SnapshotHeader& header,
+                  std::vector<SnapshotEntry>& entries);
+
+}  // namespace vistel::wire

@@ -1,0 +1,83 @@
+// vistel-server: the session server (DESIGN.md §6).
+//   vistel-server [--port 7400] [--config config/server.toml] [--bind ADDRESS]
+//                 [--log-level LEVEL]
+// Prints "vistel-server listening on ADDRESS:PORT" on stdout once both sockets are
+// bound (port 0 picks a free one), logs to stderr, and shuts down cleanly on SIGINT or
+// SIGTERM (every client is told, sockets close, exit status 0).
+#include <cstdio>
+#include <thread>
+#include <vector>
+
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
+
+#include "server/core/server_config.hpp"
+#include "server/shell/asio.hpp"
+#include "server/shell/server_shell.hpp"
+
+int main(int argc, char** argv) {
+  using namespace vistel;
+  using namespace vistel::server;
+
+  // Command line (explicit options override the config file).
+  CLI::App app{"vistel session server: rooms, postures over UDP, control over TCP"};
+  std::string config_path = "config/server.toml";
+  int port = -1;
+  std::string bind;
+  std::string log_level;
+  app.add_option("--config", config_path, "server settings (TOML); built-in defaults if absent");
+  app.add_option("--port", port, "TCP and UDP port (0: any free port; default from config: 7400)")
+      ->check(CLI::Range(0, 65535));
+  app.add_option("--bind", bind, "listen address (default from config: 127.0.0.1)");
+  app.add_option("--log-level", log_level, "trace, debug, info, warn, error, off");
+  CLI11_PARSE(app, argc, argv);
+
+  spdlog::set_default_logger(spdlog::stderr_color_mt("vistel-server"));
+  auto config = loadServerConfig(config_path);
+  if (!config) {
+    spdlog::error("{}", config.error().message);
+    return 1;
+  }
+  if (port >= 0) config->port = static_cast<std::uint16_t>(port);
+  if (!bind.empty()) config->bind_address = bind;
+  if (!log_level.empty()) config->log_level = log_level;
+  spdlog::set_level(spdlog::level::from_str(config->log_level));
+
+  // Sockets, then the address line (tests and scripts parse it).
+  asio::io_context io;
+  ServerShell shell(io, *config);
+  if (Status st = shell.start(); !st) {
+    spdlog::error("{}", st.error().message);
+    return 1;
+  }
+  std::printf("vistel-server listening on %s\n", shell.localAddress().c_str());
+  std::fflush(stdout);
+  spdlog::info("listening on {} (TCP control, UDP postures), {} Hz ticks, {} I/O threads",
+               shell.localAddress(), config->tick_rate_hz, config->io_threads);
+
+  // SIGINT/SIGTERM: graceful stop; io.run() returns when everything is closed.
+  asio::signal_set signals(io, SIGINT, SIGTERM);
+  signals.async_wait([&](const boost::system::error_code& ec, int signal) {
+    if (ec) return;
+    spdlog::info("signal {} received", signal);
+    shell.stop();
+  });
+
+  auto run = [&io] {
+    while (true) {
+      try {
+        io.run();
+        return;
+      } catch (const std::exception& e) {
+        spdlog::error("I/O thread: unexpected exception: {}", e.what());
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int i = 1; i < config->io_threads; ++i) threads.emplace_back(run);
+  run();
+  for (std::thread& t : threads) t.join();
+  spdlog::info("shut down cleanly");
+  return 0;
+}

@@ -1,0 +1,546 @@
+#include "server/core/lobby.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "common/wire/packets.hpp"
+
+namespace vistel::server {
+namespace {
+
+constexpr int kSeatsPerRing = 16;
+
+bool validRoomName(const std::string& s) {
+  if (s.empty() || s.size() > 64) return false;
+  return std::all_of(s.begin(), s.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+           c == '.' || c == '-';
+  });
+}
+
+bool validMemberName(const std::string& s) {
+  if (s.empty() || s.size() > 64) return false;
+  return std::all_of(s.begin(), s.end(), [](char c) {
+    const auto u = static_cast<unsigned char>(c);
+    return u >= 0x20 && u != 0x7F;
+  });
+}
+
+// Bit-reversal of a 4-bit seat number: 0, 8, 4, 12, 2, ... spreads the first comers.
+int spreadOrder(int i) {
+  int r = 0;
+  for (int b = 0; b < 4; ++b) r |= ((i >> b) & 1) << (3 - b);
+  return r;
+}
+
+}  // namespace
+
+SeatPlacement seatPlacement(int index, float radius) {
+  const int ring = index / kSeatsPerRing;
+  const float r = radius * (1.0f + 0.6f * static_cast<float>(ring));
+  const float theta = 2.0f * std::numbers::pi_v<float> *
+                      static_cast<float>(spreadOrder(index % kSeatsPerRing)) /
+                      static_cast<float>(kSeatsPerRing);
+  SeatPlacement s;
+  s.x = r * std::sin(theta);
+  s.z = r * std::cos(theta);
+  s.yaw = theta + std::numbers::pi_v<float>;  // +Z turned to face the centre
+  if (s.yaw > std::numbers::pi_v<float>) s.yaw -= 2.0f * std::numbers::pi_v<float>;
+  return s;
+}
+
+Lobby::Lobby(const ServerConfig& config, std::uint64_t seed)
+    : config_(config),
+      member_ids_(config.max_members),
+      room_ids_(config.max_rooms),
+      seed_(seed),
+      rng_(seed) {}
+
+std::uint64_t Lobby::newKey() {
+  std::uint64_t key = 0;
+  while (key == 0) {
+    if (seed_ != 0) {
+      key = rng_();
+    } else {
+      key = (static_cast<std::uint64_t>(device_()) << 32) ^ device_();
+    }
+  }
+  return key;
+}
+
+Lobby::Member* Lobby::findMember(std::uint32_t id) {
+  auto it = members_.find(id);
+  return it == members_.end() ? nullptr : &it->second;
+}
+
+std::optional<RoomId> Lobby::roomOf(MemberId member) const {
+  auto it = members_.find(member.value);
+  if (it == members_.end()) return std::nullopt;
+  return it->second.room;
+}
+
+void Lobby::send(ConnId conn, const control::ServerMessage& message, Effects& fx) {
+  std::string payload;
+  message.SerializeToString(&payload);
+  OutFrame& f = fx.frames.emplace_back();
+  f.conn = conn;
+  wire::appendFrame(
+      std::span(reinterpret_cast<const std::uint8_t*>(payload.data()), payload.size()), f.bytes);
+}
+
+void Lobby::onConnect(ConnId conn, double now, Effects& /*fx*/) {
+  auto [it, inserted] = connections_.try_emplace(conn, config_.max_frame_bytes);
+  if (inserted) it->second.opened_at = now;
+}
+
+void Lobby::onStreamBytes(ConnId conn, std::span<const std::uint8_t> bytes, double now,
+                          Effects& fx) {
+  auto it = connections_.find(conn);
+  if (it == connections_.end()) return;  // already closed by us
+  Connection& c = it->second;
+  if (!c.decoder.push(bytes)) {
+    reject(conn, control::ErrorReply::BAD_MESSAGE, c.decoder.error(), now, fx);
+    return;
+  }
+  // Handle every complete frame; a handler may close the connection.
+  while (true) {
+    auto found = connections_.find(conn);
+    if (found == connections_.end()) return;
+    auto payload = found->second.decoder.next();
+    if (!payload) {
+      if (found->second.decoder.broken()) {
+        reject(conn, control::ErrorReply::BAD_MESSAGE, found->second.decoder.error(), now, fx);
+      }
+      return;
+    }
+    handleMessage(conn, found->second, *payload, now, fx);
+  }
+}
+
+void Lobby::handleMessage(ConnId conn, Connection& c, std::span<const std::uint8_t> payload,
+                          double now, Effects& fx) {
+  control::ClientMessage msg;
+  if (!msg.ParseFromArray(payload.data(), static_cast<int>(payload.size())) ||
+      msg.body_case() == control::ClientMessage::BODY_NOT_SET) {
+    reject(conn, control::ErrorReply::BAD_MESSAGE,
+           fmt::format("unparsable control message of {} bytes", payload.size()), now, fx);
+    return;
+  }
+  // Before joining only Join is allowed; after, anything but Join.
+  const bool joined = c.member.value != 0;
+  switch (msg.body_case()) {
+    case control::ClientMessage::kJoin:
+      if (joined) {
+        reject(conn, control::ErrorReply::BAD_MESSAGE, "second Join on one connection", now, fx);
+      } else {
+        handleJoin(conn, c, msg.join(), now, fx);
+      }
+      return;
+    case control::ClientMessage::kLeave:
+      if (!joined) break;
+      spdlog::info("lobby: member {:#x} leaves: {}", c.member.value,
+                   msg.leave().reason().empty() ? "no reason given" : msg.leave().reason());
+      removeMember(c.member, "left", fx);
+      connections_.erase(conn);
+      fx.closes.push_back(conn);
+      return;
+    case control::ClientMessage::kAvatarChunk:
+      if (!joined) break;
+      handleChunk(conn, c, msg.avatar_chunk(), now, fx);
+      return;
+    case control::ClientMessage::kAvatarRequest:
+      if (!joined) break;
+      handleRequest(conn, msg.avatar_request(), now, fx);
+      return;
+    case control::ClientMessage::BODY_NOT_SET:
+      break;
+  }
+  reject(conn, control::ErrorReply::BAD_MESSAGE, "expected Join as the first message", now, fx);
+}
+
+void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, double now,
+                       Effects& fx) {
+  // Validate the request.
+  if (join.protocol_version() != kProtocolVersion) {
+    reject(conn, control::ErrorReply::VERSION_MISMATCH,
+           fmt::format("protocol version {} (server speaks {})", join.protocol_version(),
+                       kProtocolVersion),
+           now, fx);
+    return;
+  }
+  if (!validRoomName(join.room())) {
+    reject(conn, control::ErrorReply::BAD_JOIN,
+           "room name must be 1-64 characters of A-Z a-z 0-9 _ . -", now, fx);
+    return;
+  }
+  if (!validMemberName(join.name())) {
+    reject(conn, control::ErrorReply::BAD_JOIN,
+           "member name must be 1-64 bytes without control characters", now, fx);
+    return;
+  }
+  if (!isContentHash(join.avatar_hash())) {
+    reject(conn, control::ErrorReply::BAD_JOIN,
+           "avatar hash must be 64 lowercase hex characters (SHA-256)", now, fx);
+    return;
+  }
+  const StoredAvatar* stored = store_.find(join.avatar_hash());
+  if (stored == nullptr &&
+      (join.avatar_size() == 0 || join.avatar_size() > config_.max_avatar_bytes)) {
+    reject(conn, control::ErrorReply::AVATAR_REJECTED,
+           fmt::format("avatar of {} bytes (the server accepts 1..{})", join.avatar_size(),
+                       config_.max_avatar_bytes),
+           now, fx);
+    return;
+  }
+
+  // Find or create the room; check capacity and the name.
+  RoomRecord* room = nullptr;
+  if (auto it = room_by_name_.find(join.room()); it != room_by_name_.end()) {
+    room = &rooms_.at(it->second);
+    if (static_cast<int>(room->members.size()) >= config_.max_members_per_room) {
+      reject(conn, control::ErrorReply::ROOM_FULL,
+             fmt::format("room '{}' is full ({} members)", join.room(), room->members.size()), now,
+             fx);
+      return;
+    }
+    for (MemberId other : room->members) {
+      if (members_.at(other.value).name == join.name()) {
+        reject(conn, control::ErrorReply::NAME_TAKEN,
+               fmt::format("name '{}' is taken in room '{}'", join.name(), join.room()), now, fx);
+        return;
+      }
+    }
+  }
+  if (static_cast<int>(members_.size()) >= config_.max_members) {
+    reject(conn, control::ErrorReply::SERVER_FULL, "the server is full", now, fx);
+    return;
+  }
+  if (room == nullptr) {
+    const std::uint32_t rid = room_ids_.allocate();
+    if (rid == 0) {
+      reject(conn, control::ErrorReply::SERVER_FULL, "no more rooms on this server", now, fx);
+      return;
+    }
+    RoomRecord& r = rooms_[rid];
+    r.id = RoomId{rid};
+    r.name = join.room();
+    r.seat_taken.assign(static_cast<std::size_t>(config_.max_members_per_room), false);
+    room_by_name_[r.name] = rid;
+    RoomCommand cmd;
+    cmd.kind = RoomCommand::Kind::kCreate;
+    cmd.room = r.id;
+    cmd.name = r.name;
+    fx.room_commands.push_back(cmd);
+    spdlog::info("lobby: room '{}' created", r.name);
+    room = &r;
+  }
+
+  // Create the member: id, key, seat, avatar state.
+  const std::uint32_t mid = member_ids_.allocate();
+  if (mid == 0) {
+    reject(conn, control::ErrorReply::SERVER_FULL, "the server is full", now, fx);
+    return;
+  }
+  Member& m = members_[mid];
+  m.id = MemberId{mid};
+  m.conn = conn;
+  m.room = room->id;
+  m.name = join.name();
+  m.avatar_hash = join.avatar_hash();
+  m.avatar_size = join.avatar_size();
+  m.key = newKey();
+  const auto free_seat = std::find(room->seat_taken.begin(), room->seat_taken.end(), false);
+  m.seat = static_cast<int>(free_seat - room->seat_taken.begin());
+  *free_seat = true;
+  if (stored != nullptr) {
+    m.avatar_ready = true;
+    m.joint_count = stored->joint_count;
+    store_.addRef(m.avatar_hash);
+  }
+  room->members.push_back(m.id);
+  c.member = m.id;
+
+  RoomCommand add;
+  add.kind = RoomCommand::Kind::kAddMember;
+  add.room = room->id;
+  add.member = m.id;
+  add.key = m.key;
+  add.joint_count = m.joint_count;
+  fx.room_commands.push_back(add);
+
+  // Welcome, then the new roster to everyone in the room.
+  control::ServerMessage msg;
+  control::Welcome& w = *msg.mutable_welcome();
+  w.set_protocol_version(kProtocolVersion);
+  w.set_member_id(m.id.value);
+  w.set_udp_key(m.key);
+  w.set_tick_rate_hz(config_.tick_rate_hz);
+  w.set_server_time(now);
+  w.set_room(room->name);
+  w.set_upload_avatar(!m.avatar_ready);
+  w.set_max_chunk_bytes(static_cast<std::uint32_t>(config_.avatar_chunk_bytes));
+  w.set_max_avatar_bytes(config_.max_avatar_bytes);
+  w.set_max_datagram_bytes(static_cast<std::uint32_t>(wire::kMaxDatagramBytes));
+  send(conn, msg, fx);
+  spdlog::info("lobby: '{}' joined room '{}' as member {:#x} (seat {}, avatar {}{})", m.name,
+               room->name, m.id.value, m.seat, m.avatar_hash.substr(0, 12),
+               m.avatar_ready ? "" : ", upload requested");
+  sendRoster(*room, fx);
+}
+
+void Lobby::handleChunk(ConnId conn, Connection& c, const control::AvatarChunk& chunk, double now,
+                        Effects& fx) {
+  Member* m = findMember(c.member.value);
+  if (m == nullptr) return;
+  if (m->avatar_ready) return;  // someone else uploaded the same avatar meanwhile
+  // The chunk must continue exactly the offered file.
+  std::string problem;
+  if (chunk.hash() != m->avatar_hash) {
+    problem = "chunk for another hash than the one offered at join";
+  } else if (chunk.total_size() != m->avatar_size) {
+    problem = fmt::format("total size {} differs from the offered {}", chunk.total_size(),
+                          m->avatar_size);
+  } else if (chunk.offset() != c.upload.size()) {
+    problem = fmt::format("chunk at offset {}, expected {}", chunk.offset(), c.upload.size());
+  } else if (chunk.data().empty() || chunk.data().size() > config_.avatar_chunk_bytes) {
+    problem = fmt::format("chunk of {} bytes (1..{} allowed)", chunk.data().size(),
+                          config_.avatar_chunk_bytes);
+  } else if (c.upload.size() + chunk.data().size() > m->avatar_size) {
+    problem = "chunk runs past the offered size";
+  }
+  if (!problem.empty()) {
+    reject(conn, control::ErrorReply::AVATAR_REJECTED, "avatar upload: " + problem, now, fx);
+    return;
+  }
+  c.upload.insert(c.upload.end(), chunk.data().begin(), chunk.data().end());
+  if (c.upload.size() < m->avatar_size) return;
+
+  // Complete: validate and store, then everyone waiting for it is ready.
+  const std::string hash = m->avatar_hash;
+  Status added =
+      store_.add(hash, std::move(c.upload), fmt::format("avatar upload from '{}'", m->name));
+  c.upload.clear();
+  if (!added) {
+    reject(conn, control::ErrorReply::AVATAR_REJECTED, added.error().message, now, fx);
+    return;
+  }
+  spdlog::info("lobby: avatar {} uploaded by '{}' ({} bytes)", hash.substr(0, 12), m->name,
+               m->avatar_size);
+  avatarBecameReady(hash, fx);
+}
+
+void Lobby::avatarBecameReady(const std::string& hash, Effects& fx) {
+  const StoredAvatar* stored = store_.find(hash);
+  if (stored == nullptr) return;
+  std::vector<std::uint32_t> touched_rooms;
+  for (auto& [id, m] : members_) {
+    if (m.avatar_ready || m.avatar_hash != hash) continue;
+    m.avatar_ready = true;
+    m.joint_count = stored->joint_count;
+    store_.addRef(hash);
+    RoomCommand cmd;
+    cmd.kind = RoomCommand::Kind::kSetAvatar;
+    cmd.room = m.room;
+    cmd.member = m.id;
+    cmd.joint_count = m.joint_count;
+    fx.room_commands.push_back(cmd);
+    control::ServerMessage msg;
+    msg.mutable_avatar_accepted()->set_hash(hash);
+    send(m.conn, msg, fx);
+    if (std::find(touched_rooms.begin(), touched_rooms.end(), m.room.value) ==
+        touched_rooms.end()) {
+      touched_rooms.push_back(m.room.value);
+    }
+  }
+  store_.pruneUnreferenced();
+  for (std::uint32_t rid : touched_rooms) sendRoster(rooms_.at(rid), fx);
+}
+
+void Lobby::handleRequest(ConnId conn, const control::AvatarRequest& request, double /*now*/,
+                          Effects& fx) {
+  const StoredAvatar* stored = store_.find(request.hash());
+  control::ServerMessage msg;
+  if (stored == nullptr) {
+    msg.mutable_avatar_missing()->set_hash(request.hash().substr(0, 64));
+    send(conn, msg, fx);
+    return;
+  }
+  // The file in chunks, in order.
+  const std::vector<std::uint8_t>& bytes = *stored->bytes;
+  control::AvatarChunk& chunk = *msg.mutable_avatar_chunk();
+  chunk.set_hash(request.hash());
+  chunk.set_total_size(bytes.size());
+  for (std::size_t offset = 0; offset < bytes.size(); offset += config_.avatar_chunk_bytes) {
+    const std::size_t n = std::min(config_.avatar_chunk_bytes, bytes.size() - offset);
+    chunk.set_offset(offset);
+    chunk.set_data(reinterpret_cast<const char*>(bytes.data() + offset), n);
+    send(conn, msg, fx);
+  }
+}
+
+void Lobby::onHello(std::span<const std::uint8_t> datagram, const wire::Endpoint& from, double now,
+                    Effects& fx) {
+  wire::HelloPacket hello;
+  if (!wire::read(datagram, hello)) {
+    drops_.drop(now, "malformed hello",
+                fmt::format("{} bytes from {}", datagram.size(), from.toString()));
+    return;
+  }
+  Member* m =
+      member_ids_.live(hello.header.member_id) ? findMember(hello.header.member_id) : nullptr;
+  if (m == nullptr || m->key != hello.header.key) {
+    drops_.drop(now, m == nullptr ? "hello for unknown member" : "hello with bad key",
+                fmt::format("member {:#x} from {}", hello.header.member_id, from.toString()));
+    return;
+  }
+  if (m->bound && !(m->endpoint == from)) {
+    drops_.drop(now, "hello from a second endpoint",
+                fmt::format("member {:#x} bound to {}, hello from {}", m->id.value,
+                            m->endpoint.toString(), from.toString()));
+    return;
+  }
+  if (!m->bound) {
+    auto taken = member_by_endpoint_.find(from);
+    if (taken != member_by_endpoint_.end()) {
+      drops_.drop(now, "endpoint already bound",
+                  fmt::format("{} belongs to member {:#x}", from.toString(), taken->second));
+      return;
+    }
+    m->bound = true;
+    m->endpoint = from;
+    member_by_endpoint_[from] = m->id.value;
+    RoomCommand cmd;
+    cmd.kind = RoomCommand::Kind::kBindEndpoint;
+    cmd.room = m->room;
+    cmd.member = m->id;
+    cmd.endpoint = from;
+    fx.room_commands.push_back(cmd);
+    spdlog::info("lobby: member {:#x} '{}' bound UDP endpoint {}", m->id.value, m->name,
+                 from.toString());
+  }
+  // Ack (10 bytes for an 18-byte hello; repeated hellos get repeated acks).
+  wire::HelloAckPacket ack;
+  ack.member_id = m->id.value;
+  ack.attempt = hello.attempt;
+  OutDatagram& out = fx.datagrams.emplace_back();
+  out.to = from;
+  wire::write(ack, out.bytes);
+}
+
+void Lobby::onDisconnect(ConnId conn, double /*now*/, Effects& fx) {
+  auto it = connections_.find(conn);
+  if (it == connections_.end()) return;
+  if (it->second.member.value != 0) removeMember(it->second.member, "disconnected", fx);
+  connections_.erase(it);
+}
+
+void Lobby::onTimedOut(MemberId member, double now, Effects& fx) {
+  Member* m = findMember(member.value);
+  if (m == nullptr) return;
+  reject(m->conn, control::ErrorReply::TIMEOUT,
+         fmt::format("no UDP traffic for {:.0f} s", config_.member_timeout_s), now, fx);
+}
+
+void Lobby::update(double now, Effects& fx) {
+  std::vector<ConnId> late;
+  for (const auto& [conn, c] : connections_) {
+    if (c.member.value == 0 && now - c.opened_at > config_.join_timeout_s) late.push_back(conn);
+  }
+  for (ConnId conn : late) {
+    reject(conn, control::ErrorReply::TIMEOUT,
+           fmt::format("no Join within {:.0f} s", config_.join_timeout_s), now, fx);
+  }
+}
+
+void Lobby::shutdown(double now, Effects& fx) {
+  std::vector<ConnId> all;
+  for (const auto& [conn, c] : connections_) all.push_back(conn);
+  for (ConnId conn : all) {
+    reject(conn, control::ErrorReply::SHUTTING_DOWN, "the server is shutting down", now, fx);
+  }
+}
+
+void Lobby::reject(ConnId conn, control::ErrorReply::Code code, const std::string& message,
+                   double now, Effects& fx) {
+  auto it = connections_.find(conn);
+  if (it == connections_.end()) return;
+  const std::string who = it->second.member.value != 0
+                              ? fmt::format("member {:#x}", it->second.member.value)
+                              : fmt::format("connection {}", conn);
+  if (code == control::ErrorReply::SHUTTING_DOWN) {
+    spdlog::debug("lobby: closing {}: {}", who, message);
+  } else {
+    drops_.drop(now, control::ErrorReply::Code_Name(code), fmt::format("{}: {}", who, message));
+  }
+  control::ServerMessage msg;
+  msg.mutable_error()->set_code(code);
+  msg.mutable_error()->set_message(message);
+  send(conn, msg, fx);
+  fx.closes.push_back(conn);
+  if (it->second.member.value != 0) removeMember(it->second.member, message, fx);
+  connections_.erase(conn);
+}
+
+void Lobby::removeMember(MemberId id, std::string_view reason, Effects& fx) {
+  auto it = members_.find(id.value);
+  if (it == members_.end()) return;
+  Member& m = it->second;
+  RoomRecord& room = rooms_.at(m.room.value);
+
+  // Out of the room: seat, roster, the room's mirror.
+  std::erase(room.members, id);
+  room.seat_taken[static_cast<std::size_t>(m.seat)] = false;
+  RoomCommand cmd;
+  cmd.kind = RoomCommand::Kind::kRemoveMember;
+  cmd.room = room.id;
+  cmd.member = id;
+  fx.room_commands.push_back(cmd);
+  spdlog::info("lobby: '{}' (member {:#x}) left room '{}': {}", m.name, id.value, room.name,
+               reason);
+
+  // Release what it held.
+  if (m.avatar_ready) store_.release(m.avatar_hash);
+  if (m.bound) member_by_endpoint_.erase(m.endpoint);
+  member_ids_.release(id.value);
+  members_.erase(it);
+
+  // An empty room closes; otherwise the others get the new roster.
+  if (room.members.empty()) {
+    RoomCommand close;
+    close.kind = RoomCommand::Kind::kClose;
+    close.room = room.id;
+    fx.room_commands.push_back(close);
+    spdlog::info("lobby: room '{}' closed (empty)", room.name);
+    const std::uint32_t rid = room.id.value;
+    room_by_name_.erase(room.name);
+    room_ids_.release(rid);
+    rooms_.erase(rid);
+  } else {
+    sendRoster(room, fx);
+  }
+}
+
+void Lobby::sendRoster(const RoomRecord& room, Effects& fx) {
+  control::ServerMessage msg;
+  control::Roster& roster = *msg.mutable_roster();
+  for (MemberId id : room.members) {
+    const Member& m = members_.at(id.value);
+    control::MemberInfo& info = *roster.add_members();
+    info.set_member_id(m.id.value);
+    info.set_name(m.name);
+    info.set_avatar_hash(m.avatar_hash);
+    info.set_joint_count(static_cast<std::uint32_t>(m.joint_count));
+    info.set_avatar_ready(m.avatar_ready);
+    const SeatPlacement seat = seatPlacement(m.seat, config_.seat_radius_m);
+    info.mutable_seat()->set_x(seat.x);
+    info.mutable_seat()->set_z(seat.z);
+    info.mutable_seat()->set_yaw(seat.yaw);
+  }
+  for (MemberId id : room.members) send(members_.at(id.value).conn, msg, fx);
+}
+
+}  // namespace vistel::server

@@ -1,0 +1,132 @@
+// The lobby: the TCP control side of the session server (proto/SESSION.md §2). It owns
+// connections, membership, rooms' rosters and seats, the avatar store and the UDP hello
+// handshake; rooms mirror what they need through RoomCommands. Pure: fed (bytes, now),
+// it appends to Effects.
+//
+// Bad input never takes more than its sender down: an unparsable, oversized or
+// out-of-order control frame, or an invalid upload, gets an ErrorReply and the
+// connection is closed (logged with the reason); a bad hello is dropped (counted,
+// logged) and never answered. A hello is answered with fewer bytes than it carried.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <random>
+#include <span>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "common/wire/endpoint.hpp"
+#include "common/wire/framing.hpp"
+#include "control.pb.h"
+#include "server/core/avatar_store.hpp"
+#include "server/core/drop_log.hpp"
+#include "server/core/effects.hpp"
+#include "server/core/handles.hpp"
+#include "server/core/server_config.hpp"
+
+namespace vistel::server {
+
+inline constexpr std::uint32_t kProtocolVersion = 1;
+
+// Where seat `index` of a room stands: on a circle of `radius` metres (a second, wider
+// ring past 16 seats), facing the centre. Seats fill in an order that spreads people
+// out: two members face each other, four form a square.
+struct SeatPlacement {
+  float x = 0.0f;
+  float z = 0.0f;
+  float yaw = 0.0f;  // radians about +Y; the avatar faces +Z at 0
+};
+SeatPlacement seatPlacement(int index, float radius);
+
+class Lobby {
+ public:
+  // seed 0: keys from std::random_device; otherwise a deterministic generator (tests).
+  Lobby(const ServerConfig& config, std::uint64_t seed);
+
+  void onConnect(ConnId conn, double now, Effects& fx);
+  void onStreamBytes(ConnId conn, std::span<const std::uint8_t> bytes, double now, Effects& fx);
+  void onDisconnect(ConnId conn, double now, Effects& fx);
+  // A datagram of type hello (any other is ignored).
+  void onHello(std::span<const std::uint8_t> datagram, const wire::Endpoint& from, double now,
+               Effects& fx);
+  // A room reports a member silent past the timeout: it is told so and removed.
+  void onTimedOut(MemberId member, double now, Effects& fx);
+  // Closes connections that have not joined within the join timeout.
+  void update(double now, Effects& fx);
+  // Tells every connection the server is shutting down and closes it.
+  void shutdown(double now, Effects& fx);
+
+  int connectionCount() const { return static_cast<int>(connections_.size()); }
+  int memberCount() const { return static_cast<int>(members_.size()); }
+  int roomCount() const { return static_cast<int>(rooms_.size()); }
+  const AvatarStore& avatars() const { return store_; }
+  const DropLog& drops() const { return drops_; }
+  // The room of a live member.
+  std::optional<RoomId> roomOf(MemberId member) const;
+
+ private:
+  struct Connection {
+    explicit Connection(std::size_t max_frame) : decoder(max_frame) {}
+    wire::FrameDecoder decoder;
+    double opened_at = 0.0;
+    MemberId member;                   // 0 until joined
+    std::vector<std::uint8_t> upload;  // avatar bytes received so far
+  };
+  struct Member {
+    MemberId id;
+    ConnId conn = 0;
+    RoomId room;
+    std::string name;
+    std::string avatar_hash;
+    std::uint64_t avatar_size = 0;
+    std::uint64_t key = 0;
+    int seat = 0;
+    bool avatar_ready = false;
+    int joint_count = 0;
+    bool bound = false;
+    wire::Endpoint endpoint;
+  };
+  struct RoomRecord {
+    RoomId id;
+    std::string name;
+    std::vector<MemberId> members;  // join order
+    std::vector<bool> seat_taken;   // per seat
+  };
+
+  void handleMessage(ConnId conn, Connection& c, std::span<const std::uint8_t> payload, double now,
+                     Effects& fx);
+  void handleJoin(ConnId conn, Connection& c, const control::Join& join, double now, Effects& fx);
+  void handleChunk(ConnId conn, Connection& c, const control::AvatarChunk& chunk, double now,
+                   Effects& fx);
+  void handleRequest(ConnId conn, const control::AvatarRequest& request, double now, Effects& fx);
+  // Every member waiting for this hash becomes ready (their rooms learn the joint count
+  // and get a new roster).
+  void avatarBecameReady(const std::string& hash, Effects& fx);
+  // Sends an ErrorReply, closes the connection and removes its member (logged).
+  void reject(ConnId conn, control::ErrorReply::Code code, const std::string& message, double now,
+              Effects& fx);
+  void removeMember(MemberId id, std::string_view reason, Effects& fx);
+  void sendRoster(const RoomRecord& room, Effects& fx);
+  void send(ConnId conn, const control::ServerMessage& message, Effects& fx);
+  std::uint64_t newKey();
+  Member* findMember(std::uint32_t id);
+
+  ServerConfig config_;
+  HandlePool member_ids_;
+  HandlePool room_ids_;
+  std::unordered_map<ConnId, Connection> connections_;
+  std::unordered_map<std::uint32_t, Member> members_;    // by MemberId value
+  std::unordered_map<std::uint32_t, RoomRecord> rooms_;  // by RoomId value
+  std::unordered_map<std::string, std::uint32_t> room_by_name_;
+  std::unordered_map<wire::Endpoint, std::uint32_t, wire::EndpointHash> member_by_endpoint_;
+  AvatarStore store_;
+  DropLog drops_{"lobby"};
+  std::uint64_t seed_;
+  std::mt19937_64 rng_;
+  std::random_device device_;
+};
+
+}  // namespace vistel::server

@@ -1,0 +1,444 @@
+#include "server/shell/server_shell.hpp"
+
+#include <exception>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+namespace vistel::server {
+namespace {
+
+constexpr std::size_t kReadChunk = 16u << 10;
+constexpr std::size_t kMaxQueuedWriteBytes = 64u << 20;  // a peer that stops reading is cut
+
+wire::Endpoint toWire(const asio::ip::udp::endpoint& e) {
+  const asio::ip::address a = e.address();
+  if (a.is_v4()) return wire::Endpoint::ipv4(a.to_v4().to_uint(), e.port());
+  wire::Endpoint w;
+  const auto bytes = a.to_v6().to_bytes();
+  std::copy(bytes.begin(), bytes.end(), w.address.begin());
+  w.port = e.port();
+  return w;
+}
+
+asio::ip::udp::endpoint toAsio(const wire::Endpoint& w) {
+  if (w.isIpv4()) return {asio::ip::address_v4(w.ipv4Address()), w.port};
+  asio::ip::address_v6::bytes_type bytes;
+  std::copy(w.address.begin(), w.address.end(), bytes.begin());
+  return {asio::ip::address_v6(bytes), w.port};
+}
+
+// Runs f, logging instead of propagating any exception (the shell's last line of defence).
+template <typename F>
+void guarded(const char* where, F&& f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    spdlog::error("{}: unexpected exception: {}", where, e.what());
+  } catch (...) {
+    spdlog::error("{}: unexpected exception", where);
+  }
+}
+
+}  // namespace
+
+struct ServerShell::TcpSession {
+  TcpSession(asio::ip::tcp::socket s, ConnId c) : socket(std::move(s)), conn(c) {}
+  asio::ip::tcp::socket socket;
+  ConnId conn;
+  std::vector<std::uint8_t> read_buffer = std::vector<std::uint8_t>(kReadChunk);
+  std::deque<std::vector<std::uint8_t>> queue;  // frames waiting to be written
+  std::size_t queued_bytes = 0;
+  bool writing = false;
+  bool close_after_flush = false;
+  bool closed = false;
+};
+
+struct ServerShell::RoomHost {
+  RoomHost(asio::io_context& io, RoomId id, std::string name, const RoomSettings& settings,
+           double now)
+      : strand(asio::make_strand(io)), timer(strand), room(id, std::move(name), settings, now) {}
+  Strand strand;
+  asio::steady_timer timer;
+  Room room;  // its strand only
+  bool closed = false;
+};
+
+ServerShell::ServerShell(asio::io_context& io, const ServerConfig& config)
+    : io_(io),
+      config_(config),
+      start_(std::chrono::steady_clock::now()),
+      lobby_strand_(asio::make_strand(io)),
+      acceptor_(lobby_strand_),
+      lobby_timer_(lobby_strand_),
+      lobby_(config, 0),
+      udp_(io),
+      udp_buffer_(65536) {}
+
+ServerShell::~ServerShell() = default;
+
+double ServerShell::now() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+}
+
+Status ServerShell::start() {
+  boost::system::error_code ec;
+  const auto address = asio::ip::make_address(config_.bind_address, ec);
+  if (ec) return fail("bind address '{}': {}", config_.bind_address, ec.message());
+
+  // TCP first (port 0 picks one), then UDP on the same number; retry if that is taken.
+  for (int attempt = 0; attempt < 20; ++attempt) {
+    asio::ip::tcp::endpoint tcp_ep(address, config_.port);
+    acceptor_.open(tcp_ep.protocol(), ec);
+    if (!ec) acceptor_.set_option(asio::socket_base::reuse_address(true), ec);
+    if (!ec) acceptor_.bind(tcp_ep, ec);
+    if (!ec) acceptor_.listen(asio::socket_base::max_listen_connections, ec);
+    if (ec) {
+      return fail("cannot listen on TCP {}:{}: {}", config_.bind_address, config_.port,
+                  ec.message());
+    }
+    port_ = acceptor_.local_endpoint().port();
+    asio::ip::udp::endpoint udp_ep(address, port_);
+    udp_.open(udp_ep.protocol(), ec);
+    if (!ec) udp_.bind(udp_ep, ec);
+    if (!ec) break;
+    udp_.close();
+    acceptor_.close();
+    if (config_.port != 0) {
+      return fail("cannot bind UDP {}:{}: {}", config_.bind_address, config_.port, ec.message());
+    }
+  }
+  if (!udp_.is_open()) return fail("cannot find a port free for both TCP and UDP");
+
+  asio::post(lobby_strand_, [this] { accept(); });
+  {
+    std::lock_guard lock(udp_mutex_);
+    receiveDatagram();
+  }
+  // The lobby's own timer: join timeouts.
+  asio::post(lobby_strand_, [this] { armLobbyTimer(); });
+  return {};
+}
+
+std::string ServerShell::localAddress() const {
+  return fmt::format("{}:{}", config_.bind_address, port_);
+}
+
+// ---------------------------------------------------------------- TCP (lobby strand)
+
+void ServerShell::armLobbyTimer() {
+  lobby_timer_.expires_after(std::chrono::milliseconds(250));
+  lobby_timer_.async_wait([this](const boost::system::error_code& ec) {
+    if (ec || stopping_) return;
+    guarded("lobby update", [&] {
+      Effects fx;
+      lobby_.update(now(), fx);
+      applyLobbyEffects(fx);
+    });
+    armLobbyTimer();
+  });
+}
+
+void ServerShell::accept() {
+  acceptor_.async_accept(
+      asio::make_strand(io_),
+      asio::bind_executor(
+          lobby_strand_, [this](const boost::system::error_code& ec, asio::ip::tcp::socket socket) {
+            if (ec) {
+              if (ec != asio::error::operation_aborted && !stopping_) {
+                spdlog::warn("accept failed: {}", ec.message());
+                accept();
+              }
+              return;
+            }
+            if (stopping_) return;
+            auto session = std::make_shared<TcpSession>(std::move(socket), next_conn_++);
+            boost::system::error_code ignored;
+            session->socket.set_option(asio::ip::tcp::no_delay(true), ignored);
+            sessions_[session->conn] = session;
+            guarded("connect", [&] {
+              Effects fx;
+              lobby_.onConnect(session->conn, now(), fx);
+              applyLobbyEffects(fx);
+            });
+            read(session);
+            accept();
+          }));
+}
+
+void ServerShell::read(std::shared_ptr<TcpSession> s) {
+  s->socket.async_read_some(
+      asio::buffer(s->read_buffer),
+      asio::bind_executor(
+          lobby_strand_, [this, s](const boost::system::error_code& ec, std::size_t n) {
+            if (s->closed) return;
+            Effects fx;
+            if (ec) {
+              guarded("disconnect", [&] { lobby_.onDisconnect(s->conn, now(), fx); });
+              s->closed = true;
+              boost::system::error_code ignored;
+              s->socket.close(ignored);
+              sessions_.erase(s->conn);
+            } else {
+              guarded("control frame", [&] {
+                lobby_.onStreamBytes(s->conn, std::span(s->read_buffer.data(), n), now(), fx);
+              });
+            }
+            applyLobbyEffects(fx);
+            if (!s->closed && !s->close_after_flush) read(s);
+          }));
+}
+
+void ServerShell::write(std::shared_ptr<TcpSession> s) {
+  if (s->writing || s->closed) return;
+  if (s->queue.empty()) {
+    if (s->close_after_flush) {
+      s->closed = true;
+      boost::system::error_code ignored;
+      s->socket.shutdown(asio::ip::tcp::socket::shutdown_both, ignored);
+      s->socket.close(ignored);
+      sessions_.erase(s->conn);
+      // Once stopping, the last closed connection ends the wait for stragglers.
+      if (stopping_ && sessions_.empty()) lobby_timer_.cancel();
+    }
+    return;
+  }
+  s->writing = true;
+  asio::async_write(
+      s->socket, asio::buffer(s->queue.front()),
+      asio::bind_executor(
+          lobby_strand_, [this, s](const boost::system::error_code& ec, std::size_t /*n*/) {
+            s->writing = false;
+            if (s->closed) return;
+            s->queued_bytes -= s->queue.front().size();
+            s->queue.pop_front();
+            if (ec) {
+              Effects fx;
+              guarded("disconnect", [&] { lobby_.onDisconnect(s->conn, now(), fx); });
+              s->closed = true;
+              boost::system::error_code ignored;
+              s->socket.close(ignored);
+              sessions_.erase(s->conn);
+              applyLobbyEffects(fx);
+              return;
+            }
+            write(s);
+          }));
+}
+
+void ServerShell::applyLobbyEffects(Effects& fx) {
+  // Frames and closes, in order, per connection.
+  for (OutFrame& f : fx.frames) {
+    auto it = sessions_.find(f.conn);
+    if (it == sessions_.end()) continue;
+    TcpSession& s = *it->second;
+    s.queued_bytes += f.bytes.size();
+    s.queue.push_back(std::move(f.bytes));
+    if (s.queued_bytes > kMaxQueuedWriteBytes && !s.close_after_flush) {
+      spdlog::warn("connection {}: peer is not reading ({} bytes queued): dropping it", s.conn,
+                   s.queued_bytes);
+      Effects drop_fx;
+      lobby_.onDisconnect(s.conn, now(), drop_fx);
+      s.queue.clear();
+      s.queued_bytes = 0;
+      s.close_after_flush = true;
+      applyLobbyEffects(drop_fx);
+    }
+  }
+  for (ConnId conn : fx.closes) {
+    auto it = sessions_.find(conn);
+    if (it != sessions_.end()) it->second->close_after_flush = true;
+  }
+  for (OutFrame& f : fx.frames) {
+    auto it = sessions_.find(f.conn);
+    if (it != sessions_.end()) write(it->second);
+  }
+  for (ConnId conn : fx.closes) {
+    auto it = sessions_.find(conn);
+    if (it != sessions_.end()) write(it->second);
+  }
+  sendDatagrams(fx.datagrams);
+
+  // Room commands: create/close rooms, route, forward in order to each room's strand.
+  for (RoomCommand& c : fx.room_commands) {
+    std::shared_ptr<RoomHost> host;
+    {
+      std::lock_guard lock(rooms_mutex_);
+      router_.apply(c);
+      if (c.kind == RoomCommand::Kind::kCreate) {
+        RoomSettings settings;
+        settings.tick_rate_hz = config_.tick_rate_hz;
+        settings.member_timeout_s = config_.member_timeout_s;
+        host = std::make_shared<RoomHost>(io_, c.room, c.name, settings, now());
+        rooms_[c.room.value] = host;
+        armRoomTimer(host);
+        continue;
+      }
+      auto it = rooms_.find(c.room.value);
+      if (it == rooms_.end()) continue;
+      host = it->second;
+      if (c.kind == RoomCommand::Kind::kClose) rooms_.erase(it);
+    }
+    asio::post(host->strand, [this, host, c] {
+      if (c.kind == RoomCommand::Kind::kClose) {
+        host->closed = true;
+        host->timer.cancel();
+        return;
+      }
+      guarded("room command", [&] { host->room.apply(c, now()); });
+    });
+  }
+  fx.clear();
+}
+
+// ---------------------------------------------------------------- rooms (room strands)
+
+void ServerShell::armRoomTimer(std::shared_ptr<RoomHost> host) {
+  asio::post(host->strand, [this, host] {
+    if (host->closed || stopping_) return;
+    const double wait = std::max(0.0, host->room.nextTickTime() - now());
+    host->timer.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+        std::chrono::duration<double>(std::min(wait, 0.1))));
+    host->timer.async_wait([this, host](const boost::system::error_code& ec) {
+      if (ec || host->closed || stopping_) return;
+      guarded("room tick", [&] {
+        Effects fx;
+        host->room.update(now(), fx);
+        applyRoomEffects(fx);
+      });
+      armRoomTimer(host);
+    });
+  });
+}
+
+void ServerShell::applyRoomEffects(Effects& fx) {
+  sendDatagrams(fx.datagrams);
+  if (!fx.timed_out.empty()) {
+    asio::post(lobby_strand_, [this, members = fx.timed_out] {
+      guarded("timeout", [&] {
+        Effects lobby_fx;
+        for (MemberId m : members) lobby_.onTimedOut(m, now(), lobby_fx);
+        applyLobbyEffects(lobby_fx);
+      });
+    });
+  }
+  fx.clear();
+}
+
+// ---------------------------------------------------------------- UDP
+
+void ServerShell::sendDatagrams(std::vector<OutDatagram>& datagrams) {
+  if (datagrams.empty()) return;
+  std::lock_guard lock(udp_mutex_);
+  if (!udp_.is_open()) return;
+  for (const OutDatagram& d : datagrams) {
+    boost::system::error_code ec;
+    udp_.send_to(asio::buffer(d.bytes), toAsio(d.to), 0, ec);
+    if (ec) spdlog::debug("send to {} failed: {}", d.to.toString(), ec.message());
+  }
+  datagrams.clear();
+}
+
+// Called with udp_mutex_ held.
+void ServerShell::receiveDatagram() {
+  udp_.async_receive_from(asio::buffer(udp_buffer_), udp_sender_,
+                          [this](const boost::system::error_code& ec, std::size_t n) {
+                            if (ec == asio::error::operation_aborted || stopping_) return;
+                            if (!ec) {
+                              auto bytes = std::make_shared<std::vector<std::uint8_t>>(
+                                  udp_buffer_.begin(), udp_buffer_.begin() + n);
+                              guarded("datagram",
+                                      [&] { onDatagram(std::move(bytes), toWire(udp_sender_)); });
+                            }
+                            std::lock_guard lock(udp_mutex_);
+                            if (udp_.is_open()) receiveDatagram();
+                          });
+}
+
+void ServerShell::onDatagram(std::shared_ptr<std::vector<std::uint8_t>> bytes,
+                             wire::Endpoint from) {
+  // Route by type and member id; the room or the lobby validates everything else.
+  std::shared_ptr<RoomHost> host;
+  DatagramRoute route;
+  {
+    std::lock_guard lock(rooms_mutex_);
+    route = routeDatagram(*bytes, router_);
+    if (route.target == DatagramRoute::Target::kRoom) {
+      auto it = rooms_.find(route.room.value);
+      if (it != rooms_.end()) host = it->second;
+    }
+  }
+  switch (route.target) {
+    case DatagramRoute::Target::kLobby:
+      asio::post(lobby_strand_, [this, bytes, from] {
+        guarded("hello", [&] {
+          Effects fx;
+          lobby_.onHello(*bytes, from, now(), fx);
+          applyLobbyEffects(fx);
+        });
+      });
+      break;
+    case DatagramRoute::Target::kRoom:
+      if (!host) break;
+      asio::post(host->strand, [this, host, bytes, from] {
+        if (host->closed) return;
+        guarded("room datagram", [&] {
+          Effects fx;
+          host->room.onDatagram(*bytes, from, now(), fx);
+          applyRoomEffects(fx);
+        });
+      });
+      break;
+    case DatagramRoute::Target::kDrop:
+      spdlog::debug("dropped datagram: {} ({} bytes from {})", route.reason, bytes->size(),
+                    from.toString());
+      break;
+  }
+}
+
+// ---------------------------------------------------------------- shutdown
+
+void ServerShell::stop() {
+  asio::post(lobby_strand_, [this] {
+    if (stopping_.exchange(true)) return;
+    spdlog::info("shutting down: closing {} connections and {} rooms", sessions_.size(),
+                 rooms_.size());
+    boost::system::error_code ignored;
+    acceptor_.close(ignored);
+    lobby_timer_.cancel();
+    // Tell everyone, then close (each session closes after its last write).
+    Effects fx;
+    guarded("shutdown", [&] { lobby_.shutdown(now(), fx); });
+    applyLobbyEffects(fx);
+    {
+      std::lock_guard lock(udp_mutex_);
+      udp_.close(ignored);
+    }
+    std::vector<std::shared_ptr<RoomHost>> hosts;
+    {
+      std::lock_guard lock(rooms_mutex_);
+      for (auto& [id, host] : rooms_) hosts.push_back(host);
+      rooms_.clear();
+    }
+    for (auto& host : hosts) {
+      asio::post(host->strand, [host] {
+        host->closed = true;
+        host->timer.cancel();
+      });
+    }
+    // A peer that never reads must not hold the process: force-close after 2 s.
+    lobby_timer_.expires_after(std::chrono::seconds(2));
+    lobby_timer_.async_wait([this](const boost::system::error_code& ec) {
+      if (ec) return;
+      for (auto& [conn, s] : sessions_) {
+        boost::system::error_code e;
+        s->closed = true;
+        s->socket.close(e);
+      }
+      sessions_.clear();
+    });
+    if (sessions_.empty()) lobby_timer_.cancel();
+  });
+}
+
+}  // namespace vistel::server

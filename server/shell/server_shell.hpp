@@ -1,0 +1,87 @@
+// The thin Asio shell around the session server's protocol core (STYLE.md: sockets,
+// timers and strands live only at the edge). TCP connections and the lobby run on one
+// strand; each room runs on its own strand with its own tick timer, so rooms spread
+// over the I/O threads. One UDP socket (same port as TCP) serves every room: incoming
+// datagrams are routed by member id to their room's strand.
+//
+// Every handler catches exceptions at its top: one bad peer cannot take the server down.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "common/base/result.hpp"
+#include "server/core/lobby.hpp"
+#include "server/core/room.hpp"
+#include "server/core/server_core.hpp"
+#include "server/shell/asio.hpp"
+
+namespace vistel::server {
+
+class ServerShell {
+ public:
+  ServerShell(asio::io_context& io, const ServerConfig& config);
+  ~ServerShell();
+
+  // Binds the TCP acceptor and the UDP socket to config.bind_address:config.port (port
+  // 0: a free port, the same number for both) and starts accepting. The error names the
+  // address and the OS reason.
+  Status start();
+  // "ADDRESS:PORT" actually bound (after start()).
+  std::string localAddress() const;
+  std::uint16_t localPort() const { return port_; }
+
+  // Graceful stop: every connection gets a shutting-down error, sockets and timers
+  // close, and io.run() returns once the last writes are flushed (at most ~2 s).
+  void stop();
+
+ private:
+  struct TcpSession;
+  struct RoomHost;
+  using Strand = asio::strand<asio::io_context::executor_type>;
+
+  double now() const;
+  void armLobbyTimer();
+  void accept();
+  void read(std::shared_ptr<TcpSession> s);
+  void write(std::shared_ptr<TcpSession> s);
+  void receiveDatagram();
+  void onDatagram(std::shared_ptr<std::vector<std::uint8_t>> bytes, wire::Endpoint from);
+  // Carries out what a core asked for. Lobby effects run on the lobby strand; room
+  // effects on the room's strand (their timeouts are posted to the lobby strand).
+  void applyLobbyEffects(Effects& fx);
+  void applyRoomEffects(Effects& fx);
+  void sendDatagrams(std::vector<OutDatagram>& datagrams);
+  void armRoomTimer(std::shared_ptr<RoomHost> host);
+
+  asio::io_context& io_;
+  ServerConfig config_;
+  std::chrono::steady_clock::time_point start_;
+  Strand lobby_strand_;
+  asio::ip::tcp::acceptor acceptor_;
+  asio::steady_timer lobby_timer_;
+  Lobby lobby_;                                                       // lobby strand only
+  std::unordered_map<ConnId, std::shared_ptr<TcpSession>> sessions_;  // lobby strand only
+  ConnId next_conn_ = 1;
+
+  std::mutex udp_mutex_;  // every operation on udp_
+  asio::ip::udp::socket udp_;
+  std::vector<std::uint8_t> udp_buffer_;
+  asio::ip::udp::endpoint udp_sender_;
+
+  mutable std::mutex rooms_mutex_;  // router_ and rooms_
+  RoomRouter router_;
+  std::unordered_map<std::uint32_t, std::shared_ptr<RoomHost>> rooms_;
+
+  std::uint16_t port_ = 0;
+  std::atomic<bool> stopping_{false};
+};
+
+}  // namespace vistel::server

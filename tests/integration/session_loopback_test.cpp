@@ -1,0 +1,273 @@
+// The walking skeleton end to end on loopback, with the real programs: vistel-server on
+// an ephemeral port (its printed address parsed), two vistel-bots replaying a clip, and
+// a headless vistel-client whose --stats-json must show both bots at >= 90% of their
+// send rate. Also the programs' failure paths and clean shutdown.
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "common/avatar/avatar_io.hpp"
+#include "common/base/file.hpp"
+#include "tests/net/synthetic_avatar.hpp"
+#include "tests/support/test_support.hpp"
+
+extern char** environ;
+
+namespace vistel {
+namespace {
+
+// A child process with its stdout (and stderr) going to a pipe or a file.
+class Child {
+ public:
+  // Starts program (a file in the build folder) with args; output to a pipe the test
+  // reads (capture) or to log_path.
+  Child(const std::string& program, const std::vector<std::string>& args,
+        const std::string& log_path, bool capture_stdout) {
+    std::vector<std::string> argv_strings = {test::binaryDir() + "/" + program};
+    argv_strings.insert(argv_strings.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (auto& s : argv_strings) argv.push_back(s.data());
+    argv.push_back(nullptr);
+
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    int pipe_fds[2] = {-1, -1};
+    if (capture_stdout) {
+      EXPECT_EQ(pipe(pipe_fds), 0);
+      posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], 1);
+      posix_spawn_file_actions_addclose(&actions, pipe_fds[0]);
+      posix_spawn_file_actions_addopen(&actions, 2, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                       0644);
+    } else {
+      posix_spawn_file_actions_addopen(&actions, 1, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                       0644);
+      posix_spawn_file_actions_adddup2(&actions, 1, 2);
+    }
+    const int rc = posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    EXPECT_EQ(rc, 0) << "cannot start " << argv[0];
+    if (capture_stdout) {
+      close(pipe_fds[1]);
+      out_fd_ = pipe_fds[0];
+    }
+  }
+  ~Child() {
+    if (pid_ > 0 && !exited_) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+    if (out_fd_ >= 0) close(out_fd_);
+  }
+
+  // The next line of captured stdout, waiting at most timeout_s.
+  std::optional<std::string> readLine(double timeout_s) {
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    std::string line;
+    while (std::chrono::steady_clock::now() < deadline) {
+      pollfd p{out_fd_, POLLIN, 0};
+      if (poll(&p, 1, 50) <= 0) continue;
+      char c = 0;
+      if (read(out_fd_, &c, 1) != 1) return std::nullopt;
+      if (c == '\n') return line;
+      line += c;
+    }
+    return std::nullopt;
+  }
+
+  void signal(int sig) { kill(pid_, sig); }
+
+  // Exit status (or -signal), waiting at most timeout_s; nullopt on timeout.
+  std::optional<int> wait(double timeout_s) {
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (std::chrono::steady_clock::now() < deadline) {
+      int status = 0;
+      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+        exited_ = true;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return std::nullopt;
+  }
+
+ private:
+  pid_t pid_ = -1;
+  int out_fd_ = -1;
+  bool exited_ = false;
+};
+
+// Starts a server on an ephemeral loopback port; returns "127.0.0.1:PORT".
+std::string startServer(Child& server) {
+  const auto line = server.readLine(20.0);
+  EXPECT_TRUE(line.has_value()) << "vistel-server printed no address";
+  const std::string prefix = "vistel-server listening on ";
+  EXPECT_EQ(line.value_or("").rfind(prefix, 0), 0u) << line.value_or("");
+  return line.value_or("").substr(prefix.size());
+}
+
+std::string logOf(const std::string& path) {
+  auto text = readFileText(path);
+  return text ? *text : std::string("(no log)");
+}
+
+class Loopback : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = test::scratchDir();
+    avatar_path_ = dir_ + "/synthetic.vavatar";
+    ASSERT_TRUE(saveAvatar(test::makeSyntheticAvatar(), avatar_path_));
+    bvh_path_ = dir_ + "/wave.bvh";
+    ASSERT_TRUE(writeFileText(bvh_path_, test::syntheticBvh(60, 30.0)));
+    // Fetched avatars go to a cache inside the scratch folder.
+    setenv("XDG_CACHE_HOME", (dir_ + "/cache").c_str(), 1);
+  }
+  std::string dir_;
+  std::string avatar_path_;
+  std::string bvh_path_;
+};
+
+TEST_F(Loopback, ServerTwoBotsAndAHeadlessClient) {
+  Child server("vistel-server", {"--port", "0"}, dir_ + "/server.log", true);
+  const std::string address = startServer(server);
+  ASSERT_FALSE(address.empty());
+
+  Child wave("vistel-bot",
+             {"--server", address, "--room", "it", "--name", "wave", "--bvh", bvh_path_, "--avatar",
+              avatar_path_, "--loop"},
+             dir_ + "/wave.log", false);
+  Child clap("vistel-bot",
+             {"--server", address, "--room", "it", "--name", "clap", "--bvh", bvh_path_, "--avatar",
+              avatar_path_, "--loop"},
+             dir_ + "/clap.log", false);
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  const std::string stats_path = dir_ + "/stats.json";
+  Child client("vistel-client",
+               {"--server", address, "--room", "it", "--name", "viewer", "--avatar", avatar_path_,
+                "--headless", "--duration", "4", "--stats-json", stats_path},
+               dir_ + "/client.log", false);
+
+  // The client finishes on its own and writes its stats.
+  const auto client_status = client.wait(30.0);
+  ASSERT_TRUE(client_status.has_value()) << logOf(dir_ + "/client.log");
+  EXPECT_EQ(*client_status, 0) << logOf(dir_ + "/client.log");
+  auto text = readFileText(stats_path);
+  ASSERT_TRUE(text) << logOf(dir_ + "/client.log");
+  const auto stats = nlohmann::json::parse(*text);
+  std::printf("[ measure  ] client stats: %s\n", stats.dump().c_str());
+  for (const char* bot : {"wave", "clap"}) {
+    ASSERT_TRUE(stats["members"].contains(bot)) << *text;
+    const double rate = stats["members"][bot]["rate_hz"].get<double>();
+    EXPECT_GE(rate, 0.9 * 30.0) << bot << "\n" << *text;
+    EXPECT_GE(stats["members"][bot]["postures_received"].get<int>(), 90) << bot;
+  }
+  EXPECT_TRUE(stats["latency_ms"]["mean"].is_number());
+  EXPECT_TRUE(stats["latency_ms"]["p99"].is_number());
+  EXPECT_LT(stats["latency_ms"]["mean"].get<double>(), 100.0);  // loopback
+  EXPECT_EQ(stats["frames_rendered"].get<int>(), 0);
+
+  // The bots leave cleanly on SIGINT; the server stops cleanly on SIGTERM.
+  wave.signal(SIGINT);
+  clap.signal(SIGINT);
+  EXPECT_EQ(wave.wait(30.0).value_or(-999), 0) << logOf(dir_ + "/wave.log");
+  EXPECT_EQ(clap.wait(30.0).value_or(-999), 0) << logOf(dir_ + "/clap.log");
+  server.signal(SIGTERM);
+  EXPECT_EQ(server.wait(10.0).value_or(-999), 0) << logOf(dir_ + "/server.log");
+  EXPECT_NE(logOf(dir_ + "/server.log").find("shut down cleanly"), std::string::npos);
+}
+
+TEST_F(Loopback, ServerStopsOnSigintWithClientsConnected) {
+  Child server("vistel-server", {"--port", "0"}, dir_ + "/server.log", true);
+  const std::string address = startServer(server);
+  Child bot("vistel-bot",
+            {"--server", address, "--room", "it", "--name", "b", "--bvh", bvh_path_, "--avatar",
+             avatar_path_, "--loop", "--count", "3"},
+            dir_ + "/bot.log", false);
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  server.signal(SIGINT);
+  EXPECT_EQ(server.wait(10.0).value_or(-999), 0) << logOf(dir_ + "/server.log");
+  // The bots are told the server is shutting down and exit with its reason.
+  EXPECT_EQ(bot.wait(10.0).value_or(-999), 1) << logOf(dir_ + "/bot.log");
+  EXPECT_NE(logOf(dir_ + "/bot.log").find("SHUTTING_DOWN"), std::string::npos)
+      << logOf(dir_ + "/bot.log");
+  EXPECT_NE(logOf(dir_ + "/server.log").find("'b-3' joined"), std::string::npos);
+}
+
+TEST_F(Loopback, ClientRendersTheRoomOffscreen) {
+  Child server("vistel-server", {"--port", "0"}, dir_ + "/server.log", true);
+  const std::string address = startServer(server);
+  Child bot("vistel-bot",
+            {"--server", address, "--room", "it", "--name", "wave", "--bvh", bvh_path_, "--avatar",
+             avatar_path_, "--loop"},
+            dir_ + "/bot.log", false);
+  const std::string shot = dir_ + "/shot.png";
+  const std::string stats_path = dir_ + "/stats.json";
+  Child client("vistel-client",
+               {"--server", address, "--room", "it", "--name", "viewer", "--avatar", avatar_path_,
+                "--duration", "2", "--screenshot", shot, "--stats-json", stats_path, "--frames",
+                dir_ + "/frames", "--frames-every", "20"},
+               dir_ + "/client.log", false);
+  ASSERT_EQ(client.wait(60.0).value_or(-999), 0) << logOf(dir_ + "/client.log");
+  if (logOf(dir_ + "/client.log").find("no rendering") != std::string::npos) {
+    GTEST_SKIP() << "no GL context on this machine: " << logOf(dir_ + "/client.log");
+  }
+  EXPECT_TRUE(std::filesystem::exists(shot)) << logOf(dir_ + "/client.log");
+  EXPECT_FALSE(std::filesystem::is_empty(dir_ + "/frames"));
+  auto text = readFileText(stats_path);
+  ASSERT_TRUE(text);
+  const auto stats = nlohmann::json::parse(*text);
+  EXPECT_GT(stats["frames_rendered"].get<int>(), 0) << *text;
+  EXPECT_TRUE(stats["members"].contains("wave")) << *text;
+  bot.signal(SIGINT);
+  EXPECT_EQ(bot.wait(10.0).value_or(-999), 0);
+  server.signal(SIGTERM);
+  EXPECT_EQ(server.wait(10.0).value_or(-999), 0);
+}
+
+TEST_F(Loopback, ProgramsRefuseBadUsageWithAClearMessage) {
+  // --recording is not wired yet: the error names the option.
+  Child rec("vistel-bot",
+            {"--server", "127.0.0.1:1", "--room", "r", "--name", "n", "--recording", "x.vrec"},
+            dir_ + "/rec.log", false);
+  EXPECT_EQ(rec.wait(10.0).value_or(-999), 2);
+  EXPECT_NE(logOf(dir_ + "/rec.log").find("--recording"), std::string::npos);
+  // No source at all.
+  Child none("vistel-bot", {"--server", "127.0.0.1:1", "--room", "r", "--name", "n"},
+             dir_ + "/none.log", false);
+  EXPECT_EQ(none.wait(10.0).value_or(-999), 2);
+  // Nobody listening: the client says so and fails.
+  Child client("vistel-client",
+               {"--server", "127.0.0.1:1", "--room", "r", "--name", "n", "--avatar", avatar_path_,
+                "--headless", "--duration", "3"},
+               dir_ + "/client.log", false);
+  EXPECT_EQ(client.wait(15.0).value_or(-999), 1);
+  EXPECT_NE(logOf(dir_ + "/client.log").find("cannot connect"), std::string::npos)
+      << logOf(dir_ + "/client.log");
+  // A server port already taken by another server.
+  Child first("vistel-server", {"--port", "0"}, dir_ + "/first.log", true);
+  const std::string address = startServer(first);
+  const std::string port = address.substr(address.rfind(':') + 1);
+  Child second("vistel-server", {"--port", port}, dir_ + "/second.log", false);
+  EXPECT_EQ(second.wait(10.0).value_or(-999), 1);
+  EXPECT_NE(logOf(dir_ + "/second.log").find(port), std::string::npos);
+  first.signal(SIGTERM);
+  EXPECT_EQ(first.wait(10.0).value_or(-999), 0);
+}
+
+}  // namespace
+}  // namespace vistel

@@ -1,0 +1,60 @@
+// The jitter buffer: order, duplicates, staleness, interpolation.
+#include <gtest/gtest.h>
+
+#include "client/net/jitter_buffer.hpp"
+#include "common/math/transform.hpp"
+
+namespace vistel::net {
+namespace {
+
+Posture at(double t, float x, float angle = 0.0f) {
+  Posture p;
+  p.time = t;
+  p.root_translation = {x, 1.0f, 0.0f};
+  p.rotations = {glm::angleAxis(angle, glm::vec3(0, 1, 0)), glm::quat(1, 0, 0, 0)};
+  return p;
+}
+
+TEST(JitterBuffer, KeepsCaptureOrderAndRefusesDuplicates) {
+  JitterBuffer b(4);
+  EXPECT_EQ(b.push(1, at(0.10, 1)), JitterBuffer::Push::kAccepted);
+  EXPECT_EQ(b.push(3, at(0.30, 3)), JitterBuffer::Push::kAccepted);
+  EXPECT_EQ(b.push(2, at(0.20, 2)), JitterBuffer::Push::kAccepted);  // late, fills the gap
+  EXPECT_EQ(b.push(3, at(0.30, 3)), JitterBuffer::Push::kDuplicate);
+  EXPECT_EQ(b.size(), 3);
+  EXPECT_DOUBLE_EQ(b.oldestTime(), 0.10);
+  EXPECT_DOUBLE_EQ(b.newestTime(), 0.30);
+  Posture p;
+  ASSERT_TRUE(b.sample(0.25, p));
+  EXPECT_NEAR(p.root_translation.x, 2.5f, 1e-5f);
+}
+
+TEST(JitterBuffer, FullBufferDropsTheOldestAndRefusesOlder) {
+  JitterBuffer b(3);
+  for (int i = 0; i < 3; ++i)
+    ASSERT_EQ(b.push(static_cast<std::uint16_t>(i), at(i, i)), JitterBuffer::Push::kAccepted);
+  EXPECT_EQ(b.push(10, at(-1.0, 0)), JitterBuffer::Push::kStale);
+  EXPECT_EQ(b.push(3, at(3.0, 3)), JitterBuffer::Push::kAccepted);
+  EXPECT_EQ(b.size(), 3);
+  EXPECT_DOUBLE_EQ(b.oldestTime(), 1.0);
+  EXPECT_DOUBLE_EQ(b.newestTime(), 3.0);
+}
+
+TEST(JitterBuffer, InterpolatesAndHoldsAtTheEnds) {
+  JitterBuffer b(8);
+  b.push(1, at(1.0, 0.0f, 0.0f));
+  b.push(2, at(2.0, 2.0f, 1.0f));
+  Posture p;
+  EXPECT_TRUE(b.sample(1.5, p));
+  EXPECT_NEAR(p.root_translation.x, 1.0f, 1e-5f);
+  EXPECT_NEAR(angleBetween(p.rotations[0], glm::angleAxis(0.5f, glm::vec3(0, 1, 0))), 0.0f, 2e-3f);
+  EXPECT_TRUE(b.sample(0.0, p));  // before: the oldest
+  EXPECT_NEAR(p.root_translation.x, 0.0f, 1e-6f);
+  EXPECT_TRUE(b.sample(9.0, p));  // after: the newest, held
+  EXPECT_NEAR(p.root_translation.x, 2.0f, 1e-6f);
+  JitterBuffer empty(2);
+  EXPECT_FALSE(empty.sample(1.0, p));
+}
+
+}  // namespace
+}  // namespace vistel::net
