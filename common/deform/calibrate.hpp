@@ -1,0 +1,52 @@
+// Calibration of an implicit model on its prototype skin (DESIGN.md §3 "Calibration"):
+// every vertex must already sit on its surface in the rest posture, so
+//   w_v = T / D_v(P_rest),
+// and contacts that already exist at rest (armpit, crotch, a joint vertex inside its
+// opposite limb) are calibrated in: each such vertex-primitive pair gets its own raised
+// threshold, so the rest posture moves nothing while deeper contacts still act.
+// Runtime code (props build their models at run time); the offline builder calls it too.
+#pragma once
+
+#include <span>
+
+#include <glm/glm.hpp>
+
+#include "common/base/result.hpp"
+#include "common/deform/implicit_model.hpp"
+
+namespace vistel {
+
+struct CalibrationOptions {
+  float rest_margin = 0.1f;     // pairs within T * rest_margin of touching at rest get a
+                                // threshold of (their rest value + T * rest_margin)
+  float always_margin = 0.02f;  // same for a joint vertex's opposite limb
+  float min_density = 0.05f;    // D_v(P_rest) below T * this: the vertex becomes free
+};
+
+struct CalibrationReport {
+  int limb = 0;
+  int joint = 0;
+  int free = 0;
+  int demoted = 0;     // limb/joint vertices made free (their field was too weak at rest)
+  int rest_pairs = 0;  // raised-threshold pairs
+};
+
+// Fills calibration.w, slope and the pairs from vertex_class and prims (which the caller
+// set: p0 and, for joint vertices, p1 = own-side limb, p2 = opposite limb), with the graph
+// finalized. rest_positions and rest_normals: the prototype skin (nvert), bind-pose model
+// space. Keeps the ring arrays and the rigid flags if already sized (clearing the flag of
+// demoted vertices), else leaves them empty per vertex / not rigid.
+Result<CalibrationReport> calibrateModel(ImplicitModel& model,
+                                         std::span<const glm::vec3> rest_positions,
+                                         std::span<const glm::vec3> rest_normals,
+                                         const CalibrationOptions& options = {});
+
+// Tangential relaxation weights (Vaillant et al. 2013): for each vertex, its one-ring
+// and mean-value coordinates of the vertex in the ring projected on its tangent plane
+// (uniform weights where the ring is open, non-manifold or not star-shaped), so that the
+// rest mesh is a fixed point of the relaxation. Fills ring_offsets, ring, ring_weights.
+void computeRelaxationWeights(std::span<const glm::vec3> rest_positions,
+                              std::span<const glm::vec3> rest_normals,
+                              std::span<const std::uint32_t> indices, Calibration& calibration);
+
+}  // namespace vistel

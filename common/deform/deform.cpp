@@ -1,0 +1,960 @@
+// Step 2 of the deformable component: per-vertex root-finding onto F = T with collision
+// terms (Gascuel 1993, "An implicit formulation for precise contact modeling between
+// flexible solids": penetration and propagation zones, the partner's field scaled by the
+// vertex weight), relative deformability, elastic memory, and a tangential relaxation
+// pass with final projection (Vaillant et al. 2013, "Implicit skinning").
+#include "common/deform/deform.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cmath>
+
+#include "common/deform/vertex_field.hpp"
+
+namespace vistel {
+namespace {
+
+// A solved offset below this is snapped to zero (the vertex stays exactly rigid).
+constexpr float kSnapOffset = 1e-7f;
+// A vertex that moved less than this keeps the rigid normals around it (Step 3).
+constexpr float kReshapeOffset = 1e-4f;
+// A vertex at its solution is on the contact surface when its deepest partner term is
+// within this of the penetration zone.
+constexpr float kContactTolerance = 1e-5f;
+constexpr float kDefaultStiffness = 3.0e4f;
+// A collider is a candidate for a vertex only when the rigid position lies within this
+// margin of the collider's support box (a vertex outside the support has its root where
+// the collider contributes nothing unless its own root is this far away).
+constexpr float kCullMargin = 0.01f;
+
+inline bool insideBox(const Bounds& b, const glm::vec3& p) {
+  return p.x >= b.min.x && p.x <= b.max.x && p.y >= b.min.y && p.y <= b.max.y && p.z >= b.min.z &&
+         p.z <= b.max.z;
+}
+
+float shareOf(float k_self, float k_other) {  // 1 - lambda, lambda = k_self / (k_self + k_other)
+  const bool rigid_self = std::isinf(k_self);
+  const bool rigid_other = std::isinf(k_other);
+  if (rigid_self && rigid_other) return 0.5f;
+  if (rigid_self) return 0.0f;
+  if (rigid_other) return 1.0f;
+  return k_other / (k_self + k_other);
+}
+
+float effectiveStiffness(float k_self, float k_other) {  // springs in series
+  const bool rigid_self = std::isinf(k_self);
+  const bool rigid_other = std::isinf(k_other);
+  if (rigid_self && rigid_other) return 1e9f;
+  if (rigid_self) return k_other;
+  if (rigid_other) return k_self;
+  return k_self * k_other / (k_self + k_other);
+}
+
+struct Candidate {
+  const PosedPrimitive* prim = nullptr;
+  float omega = 1.0f;  // partner field scale: w_v for a deformable partner, 1 for a rigid one
+  float iso = 0.5f;    // the pair's threshold
+  float share = 0.5f;  // 1 - lambda: how much of the contact this vertex takes
+  float rho = 1.0f;    // (1 - lambda) / lambda: weight of the penetration term (lambda > 0)
+  bool hard = false;   // lambda = 0 (rigid partner, soft vertex): a constraint, see below
+  float bulge = 0.0f;  // propagation amplitude (field units), 0 when off
+  float k_eff = kDefaultStiffness;
+  int collider = 0;
+};
+
+// Everything the per-vertex function needs, gathered once per vertex.
+struct VertexProblem {
+  VertexClass cls = VertexClass::kLimb;
+  const PosedPrimitive* own[4] = {nullptr, nullptr, nullptr, nullptr};  // p0, p1, p2, bone
+  float w = 1.0f;
+  float slope = 0.0f;
+  float iso = 0.5f;
+  int diff_exponent = 4;
+  glm::vec3 p0{0.0f};      // origin of the projection line (the rigid position)
+  glm::vec3 n0{0.0f};      // rigid normal
+  glm::vec3 anchor{0.0f};  // free vertices: their plane passes through this (rigid position)
+  float width = 1.0f;
+  int ncand = 0;
+  bool overflow = false;  // more colliders than kMaxCandidates (the rest dropped)
+  Candidate cand[kMaxCandidates];
+  // Side result of the last evaluation.
+  glm::vec3 own_gradient{0.0f};  // gradient of w_v D_v - T alone
+};
+
+// w_v D_v(P) - T (or the free vertex's planar excess) and its gradient.
+inline float ownExcess(const VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
+  if (vp.cls == VertexClass::kFree) {
+    grad = -vp.slope * vp.n0;
+    return -vp.slope * glm::dot(p - vp.anchor, vp.n0);
+  }
+  const float d =
+      vertexDensity(vp.cls, vp.own[0], vp.own[1], vp.own[2], vp.own[3], vp.diff_exponent, p, &grad);
+  grad *= vp.w;
+  return vp.w * d - vp.iso;
+}
+
+// Outward direction of the vertex's own field without the crease (DIFF's gradient is
+// singular where the two limbs' fields are equal): -grad(F_p0 + max(F_p1, F_p2) + F_bone).
+inline glm::vec3 smoothOwnGradient(const VertexProblem& vp, const glm::vec3& p) {
+  if (vp.cls != VertexClass::kJoint) return vp.own_gradient;
+  glm::vec3 g0, ga, gb, gbone(0.0f);
+  primitiveField(*vp.own[0], p, &g0);
+  const float fa = primitiveField(*vp.own[1], p, &ga);
+  const float fb = primitiveField(*vp.own[2], p, &gb);
+  if (vp.own[3] != nullptr) primitiveField(*vp.own[3], p, &gbone);
+  return vp.w * (g0 + (fa >= fb ? ga : gb) + gbone);
+}
+
+// The soft part of Step 2's equation, g(P) = w_v D_v(P) - T + sum_i COLL_i with the
+// penetration terms weighted by relative deformability:
+//   g = (w_v D_v - T) + sum_i bulge_i h(s_i) - sum_{i soft} rho_i max(0, x_i),
+// x_i = omega_i F_i(P) - iso_i, rho_i = (1 - lambda_i) / lambda_i, i.e. (for one partner)
+// lambda (w_v D_v - T) = (1 - lambda) x: lambda = 1/2 is Gascuel's common surface. Rigid
+// partners (lambda = 0) are not in g: they are hard constraints x_i <= 0 applied after.
+inline float evaluate(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
+  float g = ownExcess(vp, p, grad);
+  vp.own_gradient = grad;
+  for (int i = 0; i < vp.ncand; ++i) {
+    const Candidate& c = vp.cand[i];
+    if (!inBounds(*c.prim, p)) continue;
+    glm::vec3 gf;
+    const float f = primitiveField(*c.prim, p, &gf);
+    const float x = c.omega * f - c.iso;
+    if (x > 0.0f) {
+      if (!c.hard) {
+        g -= c.rho * x;
+        grad -= (c.rho * c.omega) * gf;
+      }
+    } else if (c.bulge > 0.0f && x > -vp.width) {
+      float dterm = 0.0f;
+      g += collisionTerm(x, c.bulge, vp.width, &dterm);
+      grad += (dterm * c.omega) * gf;
+    }
+  }
+  return g;
+}
+
+// Deepest hard-constraint violation at p: the rigid partner with the largest x, or -1.
+inline int deepestHard(const VertexProblem& vp, const glm::vec3& p, float& x_out) {
+  int best = -1;
+  x_out = -INFINITY;
+  for (int i = 0; i < vp.ncand; ++i) {
+    const Candidate& c = vp.cand[i];
+    if (!c.hard || !inBounds(*c.prim, p)) continue;
+    const float x = c.omega * primitiveField(*c.prim, p) - c.iso;
+    if (x > x_out) {
+      x_out = x;
+      best = i;
+    }
+  }
+  return best;
+}
+
+float atomicMaxBits(std::uint32_t& target, float value) {
+  // Non-negative floats order like their bit patterns.
+  std::atomic_ref<std::uint32_t> ref(target);
+  const std::uint32_t bits = std::bit_cast<std::uint32_t>(value);
+  std::uint32_t cur = ref.load(std::memory_order_relaxed);
+  while (cur < bits && !ref.compare_exchange_weak(cur, bits, std::memory_order_relaxed)) {
+  }
+  return value;
+}
+
+struct Frame {
+  const ImplicitModel* model = nullptr;
+  std::span<const BodyView> bodies;
+  int self = 0;
+  const DeformInput* in = nullptr;
+  DeformState* st = nullptr;
+  const DeformOptions* opt = nullptr;
+  const PosedPrimitives* posed = nullptr;
+  float dt = 0.0f;
+  int nvert = 0;
+  int chunk = 512;
+};
+
+float ownStiffness(const Frame& fr, int v) {
+  const std::int16_t p0 = fr.model->calibration.prims[static_cast<std::size_t>(v)][0];
+  return p0 >= 0 ? fr.model->primitives.items[static_cast<std::size_t>(p0)].stiffness
+                 : kDefaultStiffness;
+}
+
+// Fills vp's own part for vertex v (no candidates).
+void gatherOwn(const Frame& fr, int v, VertexProblem& vp) {
+  const ImplicitModel& m = *fr.model;
+  const Calibration& cal = m.calibration;
+  const auto vi = static_cast<std::size_t>(v);
+  const auto& pr = cal.prims[vi];
+  vp.cls = cal.vertex_class[vi];
+  for (std::size_t k = 0; k < 4; ++k) {
+    vp.own[k] = pr[k] >= 0 ? &fr.posed->items[static_cast<std::size_t>(pr[k])] : nullptr;
+  }
+  vp.w = cal.w[vi];
+  vp.slope = cal.slope[vi];
+  vp.iso = m.primitives.iso;
+  vp.diff_exponent = m.primitives.diff_exponent;
+  vp.p0 = fr.in->rigid_positions[vi];
+  vp.n0 = fr.in->rigid_normals[vi];
+  vp.anchor = vp.p0;
+  vp.width = m.primitives.propagation_width;
+  vp.ncand = 0;
+  vp.overflow = false;
+}
+
+// Pass A for vertex v: finds its collision candidates into the state's cache (colliders of
+// its own primitives from Step 1 except its own defining ones, and its always-pairs: the
+// opposite limb of a joint vertex), each only when the rigid position p0 is near the
+// collider's support; records the rigid-pose penetration (depth, pressure) and each
+// collider's deepest penetration this frame.
+void findCandidates(const Frame& fr, int v, const glm::vec3& p0) {
+  const ImplicitModel& m = *fr.model;
+  const Calibration& cal = m.calibration;
+  DeformState& st = *fr.st;
+  const auto vi = static_cast<std::size_t>(v);
+  const auto& pr = cal.prims[vi];
+  std::uint16_t* ids = &st.cand_collider[vi * kMaxCandidates];
+  float* isos = &st.cand_iso[vi * kMaxCandidates];
+  int n = 0;
+  bool overflow = false;
+  float best_depth = 0.0f;
+  float best_pressure = 0.0f;
+  const float w = cal.w[vi];
+  const float k_self = ownStiffness(fr, v);
+  const std::uint32_t pair_begin = cal.pair_offsets[vi];
+  const std::uint32_t pair_end = cal.pair_offsets[vi + 1];
+  const auto consider = [&](int c, bool same_body_rules) {
+    for (int i = 0; i < n; ++i) {
+      if (ids[i] == c) return;
+    }
+    DeformState::Collider& col = st.colliders[static_cast<std::size_t>(c)];
+    if (!insideBox(col.cull, p0)) return;
+    glm::vec3 gd;
+    const float d = skeletonDistance(col.posed->shape, p0, &gd);
+    if (d > col.cull_distance) return;
+    float iso = m.primitives.iso;
+    if (same_body_rules) {
+      for (std::uint32_t q = pair_begin; q < pair_end; ++q) {
+        if (cal.pairs[q].prim == col.prim) iso = cal.pairs[q].iso;
+      }
+    }
+    if (n == kMaxCandidates) {
+      overflow = true;
+      return;
+    }
+    ids[n] = static_cast<std::uint16_t>(c);
+    isos[n] = iso;
+    ++n;
+    // Rigid-pose penetration into this collider.
+    const PosedPrimitive& prim = *col.posed;
+    const float r = d * prim.inv_r_out;
+    if (r >= 1.0f) return;
+    float fp = 0.0f;
+    const float f = prim.weight * densityValue(prim.density, r, &fp);
+    const float k_other = prim.stiffness;
+    const float omega = std::isinf(k_other) ? 1.0f : w;
+    const float x = omega * f - iso;
+    if (!(x > 0.0f)) return;
+    atomicMaxBits(col.pmax_bits, x);
+    const float gn = omega * prim.weight * std::abs(fp) * prim.inv_r_out * glm::length(gd);
+    const float depth = gn > 0.0f ? x / gn : 0.0f;
+    if (depth > best_depth) {
+      best_depth = depth;
+      best_pressure = effectiveStiffness(k_self, k_other) * depth;
+    }
+  };
+  if (fr.opt->collisions) {
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::int16_t o = pr[k];
+      if (o < 0) continue;
+      const auto ou = static_cast<std::size_t>(o);
+      for (std::uint32_t j = st.prim_collider_offsets[ou]; j < st.prim_collider_offsets[ou + 1];
+           ++j) {
+        const int c = st.prim_colliders[j];
+        const DeformState::Collider& col = st.colliders[static_cast<std::size_t>(c)];
+        const bool same = col.body == fr.self;
+        if (same &&
+            (col.prim == pr[0] || col.prim == pr[1] || col.prim == pr[2] || col.prim == pr[3])) {
+          continue;
+        }
+        consider(c, same);
+      }
+    }
+    for (std::uint32_t q = pair_begin; q < pair_end; ++q) {
+      const VertexPair& vpair = cal.pairs[q];
+      if ((vpair.flags & kPairAlways) == 0) continue;
+      const std::int32_t c = st.always_collider[static_cast<std::size_t>(vpair.prim)];
+      if (c >= 0) consider(c, true);
+    }
+  }
+  st.cand_count[vi] = static_cast<std::uint8_t>(n | (overflow ? 0x80 : 0));
+  st.depth[vi] = best_depth;
+  st.pressure[vi] = best_pressure;
+}
+
+// Loads vertex v's cached candidates into vp with their material terms. with_bulge: use
+// this frame's deepest penetrations (after pass A).
+void loadCandidates(const Frame& fr, int v, bool with_bulge, VertexProblem& vp) {
+  const DeformState& st = *fr.st;
+  const auto vi = static_cast<std::size_t>(v);
+  const int n = st.cand_count[vi] & 0x7F;
+  vp.overflow = (st.cand_count[vi] & 0x80) != 0;
+  vp.ncand = n;
+  if (n == 0) return;
+  const float k_self = ownStiffness(fr, v);
+  const float amplitude = fr.opt->propagation ? fr.model->primitives.propagation_amplitude : 0.0f;
+  for (int i = 0; i < n; ++i) {
+    const int c = st.cand_collider[vi * kMaxCandidates + static_cast<std::size_t>(i)];
+    const DeformState::Collider& col = st.colliders[static_cast<std::size_t>(c)];
+    Candidate& cd = vp.cand[i];
+    cd.prim = col.posed;
+    cd.collider = c;
+    const float k_other = col.posed->stiffness;
+    cd.share = shareOf(k_self, k_other);
+    cd.hard = cd.share == 1.0f;
+    cd.rho = cd.hard ? 0.0f : cd.share / (1.0f - cd.share);
+    cd.omega = std::isinf(k_other) ? 1.0f : vp.w;
+    cd.iso = st.cand_iso[vi * kMaxCandidates + static_cast<std::size_t>(i)];
+    cd.k_eff = effectiveStiffness(k_self, k_other);
+    const float pmax = std::bit_cast<float>(col.pmax_bits);
+    const bool bulges = with_bulge && (col.body != fr.self || fr.opt->self_propagation);
+    cd.bulge = bulges ? 2.0f * cd.share * vp.w * amplitude * pmax : 0.0f;
+  }
+}
+
+// Own part and cached candidates of vertex v.
+void gatherProblem(const Frame& fr, int v, bool with_bulge, VertexProblem& vp) {
+  gatherOwn(fr, v, vp);
+  loadCandidates(fr, v, with_bulge, vp);
+}
+
+// Whether any collider could be a candidate of vertex v this frame (a cheap pre-test).
+inline bool mayHaveCandidates(const Frame& fr, int v) {
+  const Calibration& cal = fr.model->calibration;
+  const auto vi = static_cast<std::size_t>(v);
+  const DeformState& st = *fr.st;
+  for (std::uint32_t q = cal.pair_offsets[vi]; q < cal.pair_offsets[vi + 1]; ++q) {
+    if ((cal.pairs[q].flags & kPairAlways) != 0) return true;
+  }
+  for (const std::int16_t o : cal.prims[vi]) {
+    if (o >= 0 && st.prim_collider_offsets[static_cast<std::size_t>(o)] !=
+                      st.prim_collider_offsets[static_cast<std::size_t>(o) + 1]) {
+      return true;
+    }
+  }
+  return false;
+}
+
+// Pass A over [first, last): candidates, rigid-pose penetrations, deepest penetrations.
+void passPenetration(Frame& fr, int first, int last) {
+  DeformState& st = *fr.st;
+  for (int v = first; v < last; ++v) {
+    const auto vi = static_cast<std::size_t>(v);
+    if (!mayHaveCandidates(fr, v)) {
+      st.cand_count[vi] = 0;
+      st.depth[vi] = 0.0f;
+      st.pressure[vi] = 0.0f;
+      continue;
+    }
+    findCandidates(fr, v, fr.in->rigid_positions[vi]);
+  }
+}
+
+Elasticity vertexElasticity(const Frame& fr, int v) {
+  const std::int16_t p0 = fr.model->calibration.prims[static_cast<std::size_t>(v)][0];
+  return p0 >= 0 ? fr.model->primitives.items[static_cast<std::size_t>(p0)].elasticity
+                 : Elasticity::kElastic;
+}
+
+float searchReach(const VertexProblem& vp) {
+  const float r = vp.own[0] != nullptr ? vp.own[0]->reach : 0.05f;
+  return std::max(r, 0.02f);
+}
+
+// Marks vertex v and its one-ring as needing new normals (other chunks may mark the same
+// vertices: relaxed atomic stores of the same value, so the result does not depend on order).
+inline void markReshaped(const Frame& fr, int v) {
+  const Calibration& cal = fr.model->calibration;
+  DeformState& st = *fr.st;
+  const auto vi = static_cast<std::size_t>(v);
+  std::atomic_ref<std::uint8_t>(st.dirty[vi]).store(1, std::memory_order_relaxed);
+  for (std::uint32_t k = cal.ring_offsets[vi]; k < cal.ring_offsets[vi + 1]; ++k) {
+    std::atomic_ref<std::uint8_t>(st.dirty[cal.ring[k]]).store(1, std::memory_order_relaxed);
+  }
+}
+
+// Deepest partner term at p over all candidates (x and index, -1 when none).
+inline int deepestPartner(const VertexProblem& vp, const glm::vec3& p, float& x_out) {
+  int best = -1;
+  x_out = -INFINITY;
+  for (int i = 0; i < vp.ncand; ++i) {
+    const Candidate& c = vp.cand[i];
+    const float x = inBounds(*c.prim, p) ? c.omega * primitiveField(*c.prim, p) - c.iso : -c.iso;
+    if (x > x_out) {
+      x_out = x;
+      best = i;
+    }
+  }
+  return best;
+}
+
+// Solves the soft equation along dir from s_start (first evaluation g, grad given), then
+// enforces the hard constraints (rigid partners: the vertex ends on their surface).
+RootResult solveVertex(VertexProblem& vp, const glm::vec3& dir, float s_start, float g,
+                       const glm::vec3& grad, float reach, const RootOptions& ropt,
+                       DeformCounters& cnt, bool& iterated) {
+  const glm::vec3 p0 = vp.p0;
+  RootResult res;
+  res.s = s_start;
+  const float dg0 = glm::dot(grad, dir);
+  res.found = std::abs(g) < ropt.tolerance || std::abs(g) < ropt.step_tolerance * std::abs(dg0);
+  if (!res.found) {
+    iterated = true;
+    auto eval = [&](float s, float* dg) {
+      glm::vec3 gr;
+      const float val = evaluate(vp, p0 + s * dir, gr);
+      *dg = glm::dot(gr, dir);
+      return val;
+    };
+    res = findRoot(eval, s_start, g, dg0, reach, ropt);
+    cnt.evaluations += res.iterations;
+    cnt.iterations += res.iterations;
+  }
+  // Rigid partners: a vertex inside one retreats onto its surface (x = 0).
+  for (int round = 0; round < 2 && res.found; ++round) {
+    float x = 0.0f;
+    const int h = deepestHard(vp, p0 + res.s * dir, x);
+    if (h < 0 || x <= ropt.tolerance) break;
+    iterated = true;
+    const Candidate& c = vp.cand[h];
+    auto eval_hard = [&](float s, float* dg) {
+      glm::vec3 gf;
+      const float f = primitiveField(*c.prim, p0 + s * dir, &gf);
+      *dg = -c.omega * glm::dot(gf, dir);
+      return c.iso - c.omega * f;
+    };
+    const RootResult rh = findRoot(eval_hard, res.s, reach, ropt);
+    cnt.evaluations += 1 + rh.iterations;
+    cnt.iterations += 1 + rh.iterations;
+    res.found = rh.found;
+    if (rh.found) res.s = rh.s;
+  }
+  return res;
+}
+
+// Pass B: solve every vertex of [first, last).
+void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
+  DeformState& st = *fr.st;
+  const DeformOptions& opt = *fr.opt;
+  VertexProblem vp;
+  const Calibration& cal = fr.model->calibration;
+  for (int v = first; v < last; ++v) {
+    const auto vi = static_cast<std::size_t>(v);
+    // A rigid limb vertex with nothing near it is on its surface by construction.
+    if (cal.rigid[vi] != 0 && (st.cand_count[vi] & 0x7F) == 0 && st.offset[vi] == 0.0f &&
+        st.memory[vi] == 0.0f && opt.projection == ProjectionMode::kNormal) {
+      st.positions[vi] = fr.in->rigid_positions[vi];
+      st.directions[vi] = fr.in->rigid_normals[vi];
+      st.contact_body[vi] = -1;
+      st.flags[vi] = 0;
+      ++cnt.rigid_vertices;
+      continue;
+    }
+    gatherProblem(fr, v, true, vp);
+    if (vp.overflow) ++cnt.candidate_overflow;
+    std::uint8_t flags = 0;
+    const float reach = searchReach(vp);
+
+    // First evaluation at the warm start along the normal.
+    glm::vec3 dir = vp.n0;
+    float s_start = st.offset[vi];
+    if ((st.flags[vi] & kVertexGradient) != 0 || opt.projection == ProjectionMode::kGradient) {
+      s_start = 0.0f;  // a gradient line is re-derived each frame from the rigid position
+    }
+    glm::vec3 grad;
+    float g = evaluate(vp, vp.p0 + s_start * dir, grad);
+    ++cnt.evaluations;
+    // Project along -grad F when asked, or where the normal disagrees strongly with the
+    // own field's (crease-free) gradient; also when the normal finds no root.
+    const bool at_root = std::abs(g) < opt.root.tolerance;
+    glm::vec3 smooth(0.0f);
+    if (!at_root) smooth = smoothOwnGradient(vp, vp.p0 + s_start * dir);
+    const float gn = glm::length(smooth);
+    const auto use_gradient = [&]() {
+      flags |= kVertexGradient;
+      ++cnt.gradient_vertices;
+      dir = -smooth / gn;
+      s_start = 0.0f;
+      g = evaluate(vp, vp.p0, grad);
+      ++cnt.evaluations;
+    };
+    if (!at_root && gn > 0.0f &&
+        (opt.projection == ProjectionMode::kGradient ||
+         -glm::dot(dir, smooth) / gn < opt.gradient_switch_cos)) {
+      use_gradient();
+    }
+    bool iterated = false;
+    RootResult res = solveVertex(vp, dir, s_start, g, grad, reach, opt.root, cnt, iterated);
+    if (!res.found && (flags & kVertexGradient) == 0 && gn > 0.0f) {
+      use_gradient();
+      res = solveVertex(vp, dir, s_start, g, grad, reach, opt.root, cnt, iterated);
+    }
+    if (iterated) ++cnt.iterating_vertices;
+
+    float s_sol = res.found ? res.s : 0.0f;
+    if (!res.found) {
+      flags |= kVertexUnsolved;
+      ++cnt.unsolved_vertices;
+    }
+    // Contact state at the solution.
+    bool touching = false;
+    int partner = -1;
+    if (res.found && vp.ncand > 0 && st.depth[vi] > 0.0f) {
+      float x = 0.0f;
+      const int c = deepestPartner(vp, vp.p0 + s_sol * dir, x);
+      if (c >= 0 && x >= -kContactTolerance) {
+        touching = true;
+        partner = st.colliders[static_cast<std::size_t>(vp.cand[c].collider)].body;
+      }
+    }
+    // Elastic memory: plastic and viscoelastic bodies keep the contact offset
+    // c = s_sol - s_free (dents only; bulges stay elastic).
+    float s_out = s_sol;
+    const Elasticity mode = vertexElasticity(fr, v);
+    if (mode != Elasticity::kElastic) {
+      float s_free = s_sol;
+      if (vp.ncand > 0 && res.found) {
+        vp.ncand = 0;
+        auto eval_free = [&](float s, float* dg) {
+          glm::vec3 gr;
+          const float val = evaluate(vp, vp.p0 + s * dir, gr);
+          *dg = glm::dot(gr, dir);
+          return val;
+        };
+        const RootResult rf = findRoot(eval_free, st.free_offset[vi], reach, opt.root);
+        cnt.evaluations += 1 + rf.iterations;
+        s_free = rf.found ? rf.s : s_sol;
+      }
+      const float c = s_sol - s_free;
+      const float target = std::min(c, 0.0f);
+      float m = st.memory[vi];
+      if (target < m) {
+        m = target;  // pressing in follows the contact at once
+      } else if (mode == Elasticity::kViscoelastic) {
+        const float tau =
+            fr.model->primitives.items[static_cast<std::size_t>(fr.model->calibration.prims[vi][0])]
+                .time_constant;
+        m = target + (m - target) * std::exp(-fr.dt / tau);
+        if (m > -kSnapOffset) m = 0.0f;
+      }
+      st.memory[vi] = m;
+      st.free_offset[vi] = s_free;
+      if (m < 0.0f) s_out = s_free + std::min(m, c);
+    }
+    if (std::abs(s_out) < kSnapOffset) s_out = 0.0f;
+
+    // Write the vertex.
+    st.offset[vi] = s_sol;
+    st.directions[vi] = dir;
+    st.positions[vi] = vp.p0 + s_out * dir;
+    if (s_out != 0.0f) flags |= kVertexMoved;
+    if (std::abs(s_out) > kReshapeOffset) {
+      flags |= kVertexReshaped;
+      markReshaped(fr, v);
+    }
+    if (touching && s_out == s_sol) {
+      flags |= kVertexContact;
+      ++cnt.contact_vertices;
+      st.contact_body[vi] = static_cast<std::int16_t>(partner);
+    } else {
+      st.contact_body[vi] = -1;
+    }
+    const bool relax = opt.relax_passes > 0 && (flags & kVertexUnsolved) == 0 &&
+                       vp.cls == VertexClass::kJoint &&
+                       (std::abs(s_out) > opt.relax_min_offset || (flags & kVertexGradient) != 0);
+    if (relax) flags |= kVertexRelaxed;
+    st.flags[vi] = flags;
+    cnt.max_offset = std::max(cnt.max_offset, std::abs(s_out));
+  }
+}
+
+// One tangential relaxation pass over the flagged vertices of [first, last): move towards
+// the rest barycentre of the one-ring within the tangent plane, then project back onto
+// F = T along the outward field normal. Reads positions, writes relaxed.
+void passRelax(Frame& fr, int first, int last, DeformCounters& cnt) {
+  DeformState& st = *fr.st;
+  const Calibration& cal = fr.model->calibration;
+  const DeformOptions& opt = *fr.opt;
+  VertexProblem vp;
+  for (int v = first; v < last; ++v) {
+    const auto vi = static_cast<std::size_t>(v);
+    if ((st.flags[vi] & kVertexRelaxed) == 0) continue;
+    st.relaxed[vi] = st.positions[vi];
+    const std::uint32_t r0 = cal.ring_offsets[vi];
+    const std::uint32_t r1 = cal.ring_offsets[vi + 1];
+    if (r0 == r1) continue;
+    gatherProblem(fr, v, true, vp);
+    // Outward field normal at the current position.
+    const glm::vec3 p = st.positions[vi];
+    glm::vec3 grad;
+    evaluate(vp, p, grad);
+    ++cnt.evaluations;
+    const float gn = glm::length(grad);
+    if (!(gn > 0.0f)) continue;
+    const glm::vec3 nu = -grad / gn;
+    // Tangential move towards the barycentre.
+    glm::vec3 centre(0.0f);
+    for (std::uint32_t j = r0; j < r1; ++j)
+      centre += cal.ring_weights[j] * st.positions[cal.ring[j]];
+    glm::vec3 delta = centre - p;
+    delta -= glm::dot(delta, nu) * nu;
+    const glm::vec3 q = p + opt.relax_rate * delta;
+    // Final projection along the field normal.
+    glm::vec3 gq;
+    const float g0 = evaluate(vp, q, gq);
+    ++cnt.evaluations;
+    vp.p0 = q;
+    bool iterated = false;
+    DeformCounters local;
+    const RootResult res =
+        solveVertex(vp, nu, 0.0f, g0, gq, searchReach(vp), opt.root, local, iterated);
+    cnt.evaluations += local.evaluations;
+    cnt.relax_iterations += local.iterations;
+    if (res.found) st.relaxed[vi] = q + res.s * nu;
+  }
+}
+
+// Step 3a: normals. Vertices untouched by deformation (and whose neighbours are too; a move
+// below kReshapeOffset counts as untouched) keep their rigid normals; the others get
+// area-weighted normals of the deformed faces.
+void passNormals(Frame& fr, int first, int last) {
+  DeformState& st = *fr.st;
+  const auto idx = fr.in->indices;
+  for (int v = first; v < last; ++v) {
+    const auto vi = static_cast<std::size_t>(v);
+    const bool dirty = st.dirty[vi] != 0;
+    if (!dirty) {
+      st.normals[vi] = fr.in->rigid_normals[vi];
+      continue;
+    }
+    glm::vec3 n(0.0f);
+    for (std::uint32_t k = st.vf_offsets[vi]; k < st.vf_offsets[vi + 1]; ++k) {
+      const std::size_t f = 3u * st.vf_faces[k];
+      const glm::vec3& a = st.positions[idx[f]];
+      n += glm::cross(st.positions[idx[f + 1]] - a, st.positions[idx[f + 2]] - a);
+    }
+    const float len = glm::length(n);
+    st.normals[vi] = len > 0.0f ? n / len : fr.in->rigid_normals[vi];
+  }
+}
+
+// Step 3b: contact areas and forces per partner (serial, fixed order).
+void passContacts(Frame& fr) {
+  DeformState& st = *fr.st;
+  const auto idx = fr.in->indices;
+  st.contacts.clear();
+  const auto entry = [&st](int partner) -> BodyContact& {
+    for (BodyContact& c : st.contacts) {
+      if (c.partner == partner) return c;
+    }
+    st.contacts.push_back(BodyContact{});
+    st.contacts.back().partner = partner;
+    return st.contacts.back();
+  };
+  for (int v = 0; v < fr.nvert; ++v) {
+    const auto vi = static_cast<std::size_t>(v);
+    const int partner = st.contact_body[vi];
+    if (partner < 0) continue;
+    BodyContact& bc = entry(partner);
+    ++bc.vertices;
+    bc.max_depth = std::max(bc.max_depth, static_cast<double>(st.depth[vi]));
+    // Each contact face once: from its lowest vertex.
+    for (std::uint32_t k = st.vf_offsets[vi]; k < st.vf_offsets[vi + 1]; ++k) {
+      const std::size_t f = 3u * st.vf_faces[k];
+      const std::uint32_t a = idx[f], b = idx[f + 1], c = idx[f + 2];
+      if (std::min({a, b, c}) != static_cast<std::uint32_t>(v)) continue;
+      if (st.contact_body[b] != partner || st.contact_body[c] != partner ||
+          st.contact_body[a] != partner) {
+        continue;
+      }
+      const glm::dvec3 pa(st.positions[a]), pb(st.positions[b]), pc(st.positions[c]);
+      const glm::dvec3 cr = glm::cross(pb - pa, pc - pa);
+      const double twice_area = glm::length(cr);
+      if (!(twice_area > 0.0)) continue;
+      const double area = 0.5 * twice_area;
+      const double p_mean =
+          (static_cast<double>(st.pressure[a]) + st.pressure[b] + st.pressure[c]) / 3.0;
+      bc.force -= (p_mean * area / twice_area) * cr;
+      bc.area += area;
+      bc.centre += area * (pa + pb + pc) / 3.0;
+    }
+  }
+  for (BodyContact& bc : st.contacts) {
+    if (bc.area > 0.0) bc.centre /= bc.area;
+  }
+}
+
+// Builds this frame's collider table: the partners Step 1 found for each own primitive,
+// plus the same-body primitives named by always-pairs.
+void buildColliders(Frame& fr, const InteractionList& list) {
+  DeformState& st = *fr.st;
+  const auto nprim = fr.model->primitives.items.size();
+  st.colliders.clear();
+  const auto find_or_add = [&](int body, int prim) -> int {
+    for (std::size_t c = 0; c < st.colliders.size(); ++c) {
+      if (st.colliders[c].body == body && st.colliders[c].prim == prim) return static_cast<int>(c);
+    }
+    DeformState::Collider col;
+    col.body = static_cast<std::uint16_t>(body);
+    col.prim = static_cast<std::uint16_t>(prim);
+    col.posed =
+        &fr.bodies[static_cast<std::size_t>(body)].posed->items[static_cast<std::size_t>(prim)];
+    col.cull.min = col.posed->bounds.min - glm::vec3(kCullMargin);
+    col.cull.max = col.posed->bounds.max + glm::vec3(kCullMargin);
+    const Shape& sh = col.posed->shape;
+    const float unit =
+        sh.kind == ShapeKind::kConeSphere ? std::min(sh.radius_a, sh.radius_b) : 1.0f;
+    col.cull_distance = 1.0f / col.posed->inv_r_out + kCullMargin / unit;
+    st.colliders.push_back(col);
+    return static_cast<int>(st.colliders.size() - 1);
+  };
+  std::fill(st.prim_collider_offsets.begin(), st.prim_collider_offsets.end(), 0u);
+  st.prim_colliders.clear();
+  const auto entries = fr.opt->collisions ? list.forBody(fr.self) : std::span<const Interaction>();
+  // Entries are sorted by own primitive: count, then fill.
+  for (const Interaction& e : entries) {
+    if (e.prim_a < nprim) ++st.prim_collider_offsets[e.prim_a + 1u];
+  }
+  for (std::size_t p = 0; p < nprim; ++p)
+    st.prim_collider_offsets[p + 1] += st.prim_collider_offsets[p];
+  for (const Interaction& e : entries) {
+    if (e.prim_a >= nprim) continue;
+    st.prim_colliders.push_back(static_cast<std::uint16_t>(find_or_add(e.body_b, e.prim_b)));
+  }
+  std::fill(st.always_collider.begin(), st.always_collider.end(), -1);
+  if (fr.opt->collisions) {
+    for (const std::int16_t p : st.always_prims) {
+      st.always_collider[static_cast<std::size_t>(p)] = find_or_add(fr.self, p);
+    }
+  }
+}
+
+}  // namespace
+
+Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t> indices,
+                       DeformState& st) {
+  const int nvert = model.calibration.vertexCount();
+  const auto nv = static_cast<std::size_t>(nvert);
+  if (indices.size() % 3 != 0)
+    return fail("deform state: index count {} not a multiple of 3", indices.size());
+  for (std::size_t i = 0; i < indices.size(); ++i) {
+    if (indices[i] >= nv) return fail("deform state: index {} = {} out of range", i, indices[i]);
+  }
+  const auto nprim = model.primitives.items.size();
+  st.positions.assign(nv, glm::vec3(0.0f));
+  st.normals.assign(nv, glm::vec3(0.0f));
+  st.offset.assign(nv, 0.0f);
+  st.free_offset.assign(nv, 0.0f);
+  st.memory.assign(nv, 0.0f);
+  st.contact_body.assign(nv, -1);
+  st.pressure.assign(nv, 0.0f);
+  st.depth.assign(nv, 0.0f);
+  st.flags.assign(nv, 0);
+  st.relaxed.assign(nv, glm::vec3(0.0f));
+  st.cand_count.assign(nv, 0);
+  st.dirty.assign(nv, 0);
+  st.cand_collider.assign(nv * kMaxCandidates, 0);
+  st.cand_iso.assign(nv * kMaxCandidates, 0.0f);
+  st.directions.assign(nv, glm::vec3(0.0f));
+  st.contacts.clear();
+  st.contacts.reserve(64);
+  st.counters = {};
+  st.time = 0.0;
+  st.started = false;
+  st.colliders.clear();
+  st.colliders.reserve(512);
+  st.prim_collider_offsets.assign(nprim + 1, 0);
+  st.prim_colliders.clear();
+  st.prim_colliders.reserve(4096);
+  st.always_collider.assign(nprim, -1);
+  // Primitives named by always-pairs.
+  std::vector<std::uint8_t> named(nprim, 0);
+  for (const VertexPair& p : model.calibration.pairs) {
+    if ((p.flags & kPairAlways) != 0 && p.prim >= 0 && static_cast<std::size_t>(p.prim) < nprim) {
+      named[static_cast<std::size_t>(p.prim)] = 1;
+    }
+  }
+  st.always_prims.clear();
+  for (std::size_t p = 0; p < nprim; ++p) {
+    if (named[p] != 0) st.always_prims.push_back(static_cast<std::int16_t>(p));
+  }
+  // Vertex -> face adjacency.
+  st.vf_offsets.assign(nv + 1, 0);
+  for (const std::uint32_t i : indices) ++st.vf_offsets[i + 1];
+  for (std::size_t v = 0; v < nv; ++v) st.vf_offsets[v + 1] += st.vf_offsets[v];
+  st.vf_faces.assign(indices.size(), 0);
+  std::vector<std::uint32_t> fill(st.vf_offsets.begin(), st.vf_offsets.end() - 1);
+  for (std::size_t i = 0; i < indices.size(); ++i) {
+    st.vf_faces[fill[indices[i]]++] = static_cast<std::uint32_t>(i / 3);
+  }
+  st.chunk_counters.assign(static_cast<std::size_t>((nvert + 511) / 512) + 1, DeformCounters{});
+  return {};
+}
+
+void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, int self,
+                const InteractionList& interactions, const DeformInput& in, DeformState& st,
+                const DeformOptions& opt, TaskPool* pool) {
+  Frame fr;
+  fr.model = &model;
+  fr.bodies = bodies;
+  fr.self = self;
+  fr.in = &in;
+  fr.st = &st;
+  fr.opt = &opt;
+  fr.posed = bodies[static_cast<std::size_t>(self)].posed;
+  fr.nvert = model.calibration.vertexCount();
+  fr.chunk = std::max(opt.chunk_size, 16);
+  fr.dt = st.started ? static_cast<float>(std::max(in.time - st.time, 0.0)) : 0.0f;
+  st.time = in.time;
+  st.started = true;
+
+  // Setup: colliders of this body, per own primitive.
+  buildColliders(fr, interactions);
+  const int chunks = (fr.nvert + fr.chunk - 1) / fr.chunk;
+  if (st.chunk_counters.size() < static_cast<std::size_t>(chunks)) {
+    st.chunk_counters.resize(static_cast<std::size_t>(chunks));
+  }
+  for (int c = 0; c < chunks; ++c)
+    st.chunk_counters[static_cast<std::size_t>(c)] = DeformCounters{};
+  const auto range = [&fr](int c) {
+    return std::pair<int, int>(c * fr.chunk, std::min(fr.nvert, (c + 1) * fr.chunk));
+  };
+
+  // Pass A: rigid-pose penetrations (only vertices with candidates do any work).
+  auto pass_a = [&](int c) {
+    const auto [b, e] = range(c);
+    passPenetration(fr, b, e);
+  };
+  if (!st.colliders.empty()) {
+    parallelFor(pool, chunks, pass_a);
+  } else {
+    std::fill(st.depth.begin(), st.depth.end(), 0.0f);
+    std::fill(st.pressure.begin(), st.pressure.end(), 0.0f);
+    std::fill(st.cand_count.begin(), st.cand_count.end(), std::uint8_t{0});
+  }
+
+  std::fill(st.dirty.begin(), st.dirty.end(), std::uint8_t{0});
+
+  // Pass B: Step 2 proper.
+  auto pass_b = [&](int c) {
+    const auto [b, e] = range(c);
+    passSolve(fr, b, e, st.chunk_counters[static_cast<std::size_t>(c)]);
+  };
+  parallelFor(pool, chunks, pass_b);
+
+  // Relaxation passes (Jacobi: read positions, write relaxed, then copy back).
+  for (int pass = 0; pass < opt.relax_passes; ++pass) {
+    auto relax = [&](int c) {
+      const auto [b, e] = range(c);
+      passRelax(fr, b, e, st.chunk_counters[static_cast<std::size_t>(c)]);
+    };
+    parallelFor(pool, chunks, relax);
+    auto copy = [&](int c) {
+      const auto [b, e] = range(c);
+      for (int v = b; v < e; ++v) {
+        const auto vi = static_cast<std::size_t>(v);
+        if ((st.flags[vi] & kVertexRelaxed) != 0) {
+          st.positions[vi] = st.relaxed[vi];
+          st.flags[vi] |= kVertexReshaped;
+          markReshaped(fr, v);
+        }
+      }
+    };
+    parallelFor(pool, chunks, copy);
+  }
+
+  // Step 3: normals, then contacts and forces.
+  auto normals = [&](int c) {
+    const auto [b, e] = range(c);
+    passNormals(fr, b, e);
+  };
+  parallelFor(pool, chunks, normals);
+  passContacts(fr);
+
+  // Counters, reduced in chunk order.
+  DeformCounters total;
+  for (int c = 0; c < chunks; ++c) {
+    const DeformCounters& k = st.chunk_counters[static_cast<std::size_t>(c)];
+    total.evaluations += k.evaluations;
+    total.iterations += k.iterations;
+    total.relax_iterations += k.relax_iterations;
+    total.iterating_vertices += k.iterating_vertices;
+    total.unsolved_vertices += k.unsolved_vertices;
+    total.gradient_vertices += k.gradient_vertices;
+    total.contact_vertices += k.contact_vertices;
+    total.candidate_overflow += k.candidate_overflow;
+    total.rigid_vertices += k.rigid_vertices;
+    total.max_offset = std::max(total.max_offset, k.max_offset);
+  }
+  for (int v = 0; v < fr.nvert; ++v) {
+    if ((st.flags[static_cast<std::size_t>(v)] & kVertexRelaxed) != 0) ++total.relaxed_vertices;
+  }
+  st.counters = total;
+}
+
+float vertexFunction(const ImplicitModel& model, std::span<const BodyView> bodies, int self,
+                     const DeformInput& input, const DeformState& state,
+                     const DeformOptions& options, int v, const glm::vec3& p, glm::vec3* gradient) {
+  Frame fr;
+  fr.model = &model;
+  fr.bodies = bodies;
+  fr.self = self;
+  fr.in = &input;
+  fr.st = const_cast<DeformState*>(&state);  // gatherProblem only reads the state
+  fr.opt = &options;
+  fr.posed = bodies[static_cast<std::size_t>(self)].posed;
+  fr.nvert = model.calibration.vertexCount();
+  VertexProblem vp;
+  gatherProblem(fr, v, true, vp);
+  glm::vec3 grad;
+  const float g = evaluate(vp, p, grad);
+  if (gradient != nullptr) *gradient = grad;
+  return g;
+}
+
+void combineContacts(std::span<const DeformState* const> states, std::vector<PairContact>& out) {
+  out.clear();
+  for (std::size_t a = 0; a < states.size(); ++a) {
+    if (states[a] == nullptr) continue;
+    for (const BodyContact& ca : states[a]->contacts) {
+      const auto b = static_cast<std::size_t>(ca.partner);
+      if (b == a) continue;  // self-contact: internal, no net force
+      // Each pair once: from the lower body, or from the only side that measured it.
+      const BodyContact* cb = nullptr;
+      if (b < states.size() && states[b] != nullptr) {
+        for (const BodyContact& x : states[b]->contacts) {
+          if (x.partner == static_cast<int>(a)) cb = &x;
+        }
+      }
+      if (cb != nullptr && b < a) continue;
+      PairContact pc;
+      pc.body_a = static_cast<int>(a);
+      pc.body_b = static_cast<int>(b);
+      pc.area_a = ca.area;
+      pc.force_on_a = cb != nullptr ? 0.5 * (ca.force - cb->force) : ca.force;
+      pc.area_b = cb != nullptr ? cb->area : 0.0;
+      out.push_back(pc);
+    }
+  }
+}
+
+glm::dvec3 netContactForce(std::span<const PairContact> pairs, int body) {
+  glm::dvec3 f(0.0);
+  for (const PairContact& p : pairs) {
+    if (p.body_a == body) f += p.force_on_a;
+    if (p.body_b == body) f -= p.force_on_a;
+  }
+  return f;
+}
+
+}  // namespace vistel

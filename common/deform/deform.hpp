@@ -1,0 +1,219 @@
+// Steps 2 and 3 of the deformable component (DESIGN.md §3), run per body per frame after
+// the rigid component (skinning):
+//   Step 2: every skin vertex moves from its rigidly posed position P along its rigidly
+//     posed normal n (or along -grad F where they disagree) to P' on F = T, where
+//       F(P) = w_v D_v(P) + sum_i COLL_i,v(P)
+//     over the primitives i that Step 1 found touching v's primitives (other bodies, or
+//     non-blending parts of the same body); Gascuel 1993 "An implicit formulation for
+//     precise contact modeling between flexible solids" for the penetration and
+//     propagation zones, with relative deformability and elastic memory (plastic,
+//     viscoelastic). Then a tangential relaxation of the moved joint vertices towards
+//     their rest barycentric positions and a final projection (Vaillant et al. 2013,
+//     "Implicit skinning: real-time skin deformation with contact modeling").
+//   Step 3: normals of the deformed skin, contact flags and areas, pressures and reaction
+//     forces per partner body.
+//
+// Space: world (rigid positions, normals and posed primitives must share it), metres,
+// seconds. Cost: O(n) in skin vertices (about one field evaluation per untouched vertex);
+// no heap allocation once the state has seen the scene's largest interaction list.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "common/base/result.hpp"
+#include "common/deform/implicit_model.hpp"
+#include "common/deform/interactions.hpp"
+#include "common/deform/posed_primitives.hpp"
+#include "common/deform/root_finding.hpp"
+#include "common/deform/task_pool.hpp"
+
+namespace vistel {
+
+enum class ProjectionMode : std::uint8_t {
+  kNormal = 0,    // along the rigidly posed vertex normal (switching to -grad F per vertex
+                  // where the two disagree, see gradient_switch_cos)
+  kGradient = 1,  // along -grad F at the rigid position, for every vertex
+};
+
+struct DeformOptions {
+  ProjectionMode projection = ProjectionMode::kNormal;
+  float gradient_switch_cos = 0.25f;  // use -grad F where cos(n, -grad F) is below this (the
+                                      // gradient of the vertex's own field without the
+                                      // crease term, whose gradient is singular on the
+                                      // crease); also used when the normal finds no root
+  RootOptions root;                   // tolerances of the per-vertex root-find
+  bool collisions = true;             // false: own fields only (creases, bones)
+  bool propagation = true;            // false: no bulge (the propagation zone's term is 0)
+  bool self_propagation = false;      // bulges for self-contact too (two facing parts of
+                                      // one body both bulge into the gap between them)
+  int relax_passes = 2;               // tangential relaxation passes (0: off)
+  float relax_rate = 0.5f;            // fraction of the way to the rest barycentre per pass
+  float relax_min_offset = 1e-3f;     // relax joint vertices that moved more than this (m)
+  int chunk_size = 512;               // vertices per parallel task (results do not depend on it
+                                      // nor on the thread count)
+};
+
+struct DeformInput {
+  std::span<const glm::vec3> rigid_positions;  // skinned positions (nvert), world
+  std::span<const glm::vec3> rigid_normals;    // skinned unit normals (nvert), world
+  std::span<const std::uint32_t> indices;      // the skin's triangles (3 * ntri)
+  double time = 0.0;                           // seconds; drives viscoelastic recovery
+};
+
+// Per-frame counters (reset by each deformSkin).
+struct DeformCounters {
+  std::int64_t evaluations = 0;       // per-vertex function evaluations, all passes
+  std::int64_t iterations = 0;        // Step 2 root-finding iterations (evaluations after the
+                                      // first), before relaxation
+  std::int64_t relax_iterations = 0;  // iterations of the relaxation's final projections
+  int iterating_vertices = 0;         // vertices whose first evaluation was not a root
+  int unsolved_vertices = 0;          // no root within reach: left at the rigid position
+  int gradient_vertices = 0;          // projected along -grad F (normal disagreed)
+  int relaxed_vertices = 0;           // moved by tangential relaxation
+  int contact_vertices = 0;           // on a contact surface
+  int candidate_overflow = 0;         // vertices with more colliders than kMaxCandidates
+  int rigid_vertices = 0;             // rigid limb vertices with nothing near: no evaluation
+  float max_offset = 0.0f;            // largest |P' - P| (m)
+
+  // Mean iterations over the vertices that iterate (the paper reports 2-3).
+  double iterationsPerVertex() const {
+    return iterating_vertices > 0 ? static_cast<double>(iterations) / iterating_vertices : 0.0;
+  }
+};
+
+// Contact of this body with one partner body, from this body's own contact faces.
+struct BodyContact {
+  int partner = -1;        // body index in the scene (may be this body: self-contact)
+  glm::dvec3 force{0.0};   // N on this body: sum over contact faces of -p * area * n
+  double area = 0.0;       // m^2 of faces whose three vertices lie on the contact
+  glm::dvec3 centre{0.0};  // area-weighted centroid of those faces (world)
+  double max_depth = 0.0;  // deepest rigid-pose penetration of a vertex (m)
+  int vertices = 0;        // contact vertices
+};
+
+inline constexpr std::uint8_t kVertexMoved = 1;      // P' != P
+inline constexpr std::uint8_t kVertexUnsolved = 2;   // no root: left rigid
+inline constexpr std::uint8_t kVertexGradient = 4;   // projected along -grad F
+inline constexpr std::uint8_t kVertexRelaxed = 8;    // moved by relaxation
+inline constexpr std::uint8_t kVertexContact = 16;   // on a contact surface
+inline constexpr std::uint8_t kVertexReshaped = 32;  // moved enough to need a new normal
+inline constexpr int kMaxCandidates = 8;             // colliders per vertex
+
+// Everything that changes per frame for one deformed body; sized once by initDeformState.
+struct DeformState {
+  std::vector<glm::vec3> positions;        // deformed positions (nvert), world
+  std::vector<glm::vec3> normals;          // deformed unit normals (nvert), world
+  std::vector<float> offset;               // last solution along the projection direction (nvert),
+                                           // the next frame's warm start (m)
+  std::vector<float> free_offset;          // same without collision terms (nvert), plastic and
+                                           // viscoelastic bodies only (m)
+  std::vector<float> memory;               // elastic memory: the contact offset kept by plastic
+                                           // and viscoelastic vertices (nvert, m, <= 0)
+  std::vector<std::int16_t> contact_body;  // partner body per vertex, -1 none (nvert)
+  std::vector<float> pressure;             // contact pressure per vertex (nvert), Pa
+  std::vector<float> depth;                // rigid-pose penetration per vertex (nvert), m
+  std::vector<std::uint8_t> flags;         // kVertex* bits (nvert)
+  std::vector<BodyContact> contacts;       // per partner body this frame
+  DeformCounters counters;
+  double time = 0.0;     // time of the last frame
+  bool started = false;  // a frame has run (time is valid)
+
+  // Scratch, sized once (internal to deformSkin).
+  struct Collider {
+    std::uint16_t body = 0;
+    std::uint16_t prim = 0;
+    const PosedPrimitive* posed = nullptr;
+    Bounds cull;                  // support box grown by a margin: farther vertices skip it
+    float cull_distance = 0.0f;   // skeleton distance beyond which a vertex skips it
+    std::uint32_t pmax_bits = 0;  // deepest penetration this frame (float bits, >= 0)
+  };
+  std::vector<Collider> colliders;
+  std::vector<std::uint32_t> prim_collider_offsets;  // (nprim + 1)
+  std::vector<std::uint16_t> prim_colliders;
+  std::vector<std::int32_t> always_collider;  // (nprim) collider of an always-pair prim
+  std::vector<std::int16_t> always_prims;     // prims named by kPairAlways pairs
+  std::vector<std::uint32_t> vf_offsets;      // vertex -> incident faces (nvert + 1)
+  std::vector<std::uint32_t> vf_faces;
+  std::vector<std::uint8_t> cand_count;      // candidates per vertex (nvert; bit 7:
+                                             // more were dropped)
+  std::vector<std::uint16_t> cand_collider;  // (nvert * kMaxCandidates)
+  std::vector<float> cand_iso;               // (nvert * kMaxCandidates)
+  std::vector<std::uint8_t> dirty;           // needs a new normal (nvert)
+  std::vector<glm::vec3> relaxed;            // relaxation pass output (nvert)
+  std::vector<glm::vec3> directions;         // projection direction used (nvert)
+  std::vector<DeformCounters> chunk_counters;
+};
+
+// Sizes a state for a model and its skin's triangles (validated: indices < nvert). The
+// state starts at rest (zero offsets and memory).
+Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t> indices,
+                       DeformState& state);
+
+// Steps 2 and 3 for body `self` of the scene `bodies` (its posed primitives must be
+// bodies[self].posed), given Step 1's interaction list over the same bodies. Writes
+// state.positions, normals, flags, counters, contacts; updates warm starts and memory.
+// pool: optional; results are bit-identical with any thread count.
+void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, int self,
+                const InteractionList& interactions, const DeformInput& input, DeformState& state,
+                const DeformOptions& options = {}, TaskPool* pool = nullptr);
+
+// One collision term COLL_i,v of DESIGN.md §3 in field units, as a function of
+// x = omega * F_i(P) - iso_pair (omega = w_v for a deformable partner, 1 for a rigid one):
+//   penetration zone (x > 0):          COLL = -x (so F = T where w_v D_v = omega F_i)
+//   propagation zone (-width < x <= 0): COLL = bulge * h(-x / width), h(s) = 27/4 s (1-s)^2
+//   elsewhere:                          0.
+// Continuous at both borders (x = 0 and x = -width). Step 2 weighs the penetration part
+// by relative deformability, lambda = k_v / (k_v + k_i) (k: the primitives' stiffness):
+// for lambda > 0 it solves
+//   (w_v D_v - T + bulges) - rho * max(0, x) = 0,  rho = (1 - lambda) / lambda
+// (one partner: lambda (w_v D_v - T) = (1 - lambda) x; lambda = 1/2 is the paper's common
+// surface, lambda = 1 leaves the vertex undeformed); a rigid partner (lambda = 0) is a
+// hard constraint x <= 0 solved after, which puts the vertex exactly on its surface.
+// bulge = 2 (1 - lambda) w_v a p_max (a: the set's propagation amplitude, p_max: the
+// deepest x of this partner over the body's rigid vertices this frame).
+inline float collisionTerm(float x, float bulge, float width, float* derivative = nullptr) {
+  if (x > 0.0f) {
+    if (derivative != nullptr) *derivative = -1.0f;
+    return -x;
+  }
+  if (x > -width && bulge > 0.0f) {
+    const float s = -x / width;
+    if (derivative != nullptr)
+      *derivative = -bulge * 6.75f * (1.0f - s) * (1.0f - 3.0f * s) / width;
+    return bulge * 6.75f * s * (1.0f - s) * (1.0f - s);
+  }
+  if (derivative != nullptr) *derivative = 0.0f;
+  return 0.0f;
+}
+
+// The function Step 2 solves for vertex v at point p (a positive multiple of F(P) - T
+// near the solution), with the colliders and deepest penetrations of the last deformSkin
+// call on `state` (same bodies, same input). For tests and tools; allocates nothing.
+float vertexFunction(const ImplicitModel& model, std::span<const BodyView> bodies, int self,
+                     const DeformInput& input, const DeformState& state,
+                     const DeformOptions& options, int v, const glm::vec3& p,
+                     glm::vec3* gradient = nullptr);
+
+// Contact between two bodies this frame, made exactly equal and opposite: the force on
+// body_a is half the difference of what each side's faces measured (or the one side's
+// measure when only one side was deformed).
+struct PairContact {
+  int body_a = 0;
+  int body_b = 0;
+  glm::dvec3 force_on_a{0.0};  // N; body_b gets -force_on_a
+  double area_a = 0.0;         // m^2 of body_a's contact faces
+  double area_b = 0.0;
+};
+
+// From the states of all bodies of a scene (null for bodies not deformed this frame).
+// Self-contacts give force 0 (internal). `out` is cleared first.
+void combineContacts(std::span<const DeformState* const> states, std::vector<PairContact>& out);
+
+// Net contact force on `body` (N) from a combined list.
+glm::dvec3 netContactForce(std::span<const PairContact> pairs, int body);
+
+}  // namespace vistel

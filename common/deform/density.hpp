@@ -1,0 +1,45 @@
+// Density functions f: [0,1] -> [0,1] of implicit primitives (DESIGN.md §3), with
+// f(0) = 1, f(1) = 0, f'(0) = f'(1) = 0, monotone decreasing.
+//
+// Wyvill, McPheeters, Wyvill 1986, "Data structure for soft objects": the soft-object
+// polynomial f(r) = 1 - 4/9 r^6 + 17/9 r^4 - 22/9 r^2.
+// Piecewise: two cubic Hermite pieces meeting at the knee (k, 1 - k) with slope -m there;
+// the slope m (0.1..3, monotone up to 3) sets how stiff the surface feels near the knee
+// (Gascuel 1993 uses such per-object stiffness profiles).
+#pragma once
+
+#include <cstdint>
+
+namespace vistel {
+
+enum class DensityKind : std::uint8_t { kWyvill = 0, kPiecewise = 1 };
+
+struct Density {
+  DensityKind kind = DensityKind::kWyvill;
+  float knee = 0.5f;   // piecewise only: r of the joint between the pieces, in [0.1, 0.9]
+  float slope = 1.5f;  // piecewise only: -f'(knee), in [0.1, 3]
+};
+
+// True when the parameters are in range (kind known, knee and slope as above).
+bool validDensity(const Density& density);
+
+// The piecewise profile (out of line).
+float piecewiseDensity(const Density& density, float r, float* derivative);
+
+// f(r) and f'(r) for r in [0, 1]; r outside is clamped (f = 1 below 0, 0 above 1, f' = 0).
+// Cost: a few multiplications; no branches beyond the piece test.
+inline float densityValue(const Density& d, float r, float* derivative = nullptr) {
+  if (r <= 0.0f || r >= 1.0f) {
+    if (derivative != nullptr) *derivative = 0.0f;
+    return r <= 0.0f ? 1.0f : 0.0f;
+  }
+  if (d.kind != DensityKind::kWyvill) return piecewiseDensity(d, r, derivative);
+  const float r2 = r * r;
+  const float r4 = r2 * r2;
+  if (derivative != nullptr) {
+    *derivative = r * (-24.0f / 9.0f * r4 + 68.0f / 9.0f * r2 - 44.0f / 9.0f);
+  }
+  return 1.0f + r2 * (-22.0f / 9.0f + r2 * (17.0f / 9.0f - 4.0f / 9.0f * r2));
+}
+
+}  // namespace vistel

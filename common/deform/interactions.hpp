@@ -1,0 +1,90 @@
+// Step 1 of the deformable component (DESIGN.md §3): the interaction list, i.e. which
+// primitives' bounding volumes overlap this frame, across bodies (avatars, props) and
+// within one body (self-contact between parts that do not blend).
+//
+// Bounding volume of a primitive: its skeleton swollen by its reach (the points where its
+// field is non-zero). Candidates come from sweep-and-prune on world x (a persistent,
+// nearly sorted order, so coherent frames cost O(m + k)), then y/z box overlap, then the
+// analytic test skeletonGap <= reach_i + reach_j. Worst case O(m^2) for m primitives.
+// A server needs only each body's CombinationGraph and posed primitives (no meshes).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "common/base/result.hpp"
+#include "common/deform/implicit_model.hpp"
+#include "common/deform/posed_primitives.hpp"
+
+namespace vistel {
+
+// One body of the collision world as Step 1 and Step 2 see it (non-owning).
+struct BodyView {
+  const CombinationGraph* graph = nullptr;  // same-body collision filter; null: no self-contact
+  const PosedPrimitives* posed = nullptr;   // this frame's posed primitives, world space
+};
+
+struct Interaction {
+  std::uint16_t body_a = 0;
+  std::uint16_t prim_a = 0;
+  std::uint16_t body_b = 0;
+  std::uint16_t prim_b = 0;
+
+  friend bool operator==(const Interaction&, const Interaction&) = default;
+};
+
+struct InteractionList {
+  // Each touching pair once, (body_a, prim_a) < (body_b, prim_b), sorted: what a server
+  // sends in a snapshot.
+  std::vector<Interaction> pairs;
+  // Derived by finalizeInteractions: every pair in both orders, sorted by (body_a, prim_a,
+  // body_b, prim_b), and where each body's entries start (nbody + 1).
+  std::vector<Interaction> directed;
+  std::vector<std::uint32_t> body_offsets;
+
+  // The directed entries whose body_a is `body`.
+  std::span<const Interaction> forBody(int body) const {
+    if (body < 0 || static_cast<std::size_t>(body) + 1 >= body_offsets.size()) return {};
+    return std::span<const Interaction>(directed).subspan(
+        body_offsets[static_cast<std::size_t>(body)],
+        body_offsets[static_cast<std::size_t>(body) + 1] -
+            body_offsets[static_cast<std::size_t>(body)]);
+  }
+};
+
+// Reused between frames by buildInteractions (sweep-and-prune order and work lists).
+struct InteractionScratch {
+  struct Item {
+    float min_x = 0.0f;
+    float max_x = 0.0f;
+    std::uint16_t body = 0;
+    std::uint16_t prim = 0;
+  };
+  std::vector<Item> items;
+  std::vector<std::uint32_t> order;   // items sorted by min_x (kept between frames)
+  std::vector<std::uint32_t> active;  // sweep's open intervals
+};
+
+// Step 1 across bodies. Pairs of different bodies collide when both primitives collide;
+// pairs within a body when its graph says so. Allocation-free once the vectors have
+// grown to this scene's size. At most 65535 bodies of at most kMaxPrimitives each.
+void buildInteractions(std::span<const BodyView> bodies, InteractionScratch& scratch,
+                       InteractionList& out);
+
+// Step 1 for a single body (self-contact only): the graph's collide pairs tested directly.
+void buildInteractions(const CombinationGraph& graph, const PosedPrimitives& posed,
+                       InteractionList& out);
+
+// Whether two posed primitives' bounding volumes overlap (box, then analytic test).
+bool boundsOverlap(const PosedPrimitive& p, const PosedPrimitive& q);
+
+// Sorts and dedupes `pairs` (ordering each pair) and fills the derived fields for
+// body_count bodies. Call after filling `pairs` by hand (e.g. from a snapshot).
+void finalizeInteractions(InteractionList& list, int body_count);
+
+// Checks a received list against the bodies: indices in range, no self-pairs, pairs the
+// bodies allow. The message names the entry.
+Status validateInteractions(const InteractionList& list, std::span<const BodyView> bodies);
+
+}  // namespace vistel

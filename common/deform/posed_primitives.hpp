@@ -1,0 +1,68 @@
+// Posing primitives (per frame): each primitive carried by its bone's skinning transform
+// into world space, with what its field needs and its bounding volume (DESIGN.md §3).
+//
+// Field of a posed primitive i: F_i(P) = W * f(d), d = skeletonDistance(P) / r_out,
+// zero for d >= 1 (outside the bound), falling off outward (F > iso means inside).
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "common/deform/implicit_model.hpp"
+
+namespace vistel {
+
+struct PosedPrimitive {
+  Shape shape;             // world space, prepared
+  float inv_r_out = 1.0f;  // 1 / r_out (skeleton-distance units)
+  float weight = 1.0f;     // W
+  Density density;
+  float stiffness = 3.0e4f;  // Pa per metre; infinity = rigid
+  Bounds bounds;             // world box of the field's support
+  float reach = 0.0f;        // metres from the skeleton to the support's edge
+  PrimitiveRole role = PrimitiveRole::kLimb;
+  bool collides = true;
+};
+
+// One body's posed primitives (sized once from its PrimitiveSet; reused every frame).
+struct PosedPrimitives {
+  std::vector<PosedPrimitive> items;  // (nprim) world space
+  Bounds bounds;                      // union of the items' boxes
+};
+
+// Poses every primitive with skin_xforms[bone]: the skinning matrices (bind-pose model
+// space -> posed model space, see skinningMatrices()) premultiplied by the body's
+// placement in the world, so the result is in world space. skin_xforms.size() must exceed
+// every bone index (checked by validatePrimitiveSet). Resizes `out` on first use only.
+// Cost: O(nprim).
+void posePrimitives(const PrimitiveSet& set, std::span<const glm::mat4> skin_xforms,
+                    PosedPrimitives& out);
+
+// One primitive carried by one transform (rest posture: the identity).
+PosedPrimitive posePrimitive(const Primitive& primitive, const glm::mat4& xform);
+
+// F_i(p) and, optionally, its gradient (zero outside the support and on the skeleton).
+inline float primitiveField(const PosedPrimitive& prim, const glm::vec3& p,
+                            glm::vec3* gradient = nullptr) {
+  glm::vec3 gd;
+  const float d =
+      skeletonDistance(prim.shape, p, gradient != nullptr ? &gd : nullptr) * prim.inv_r_out;
+  if (d >= 1.0f) {
+    if (gradient != nullptr) *gradient = glm::vec3(0.0f);
+    return 0.0f;
+  }
+  float fp = 0.0f;
+  const float f = densityValue(prim.density, d, gradient != nullptr ? &fp : nullptr);
+  if (gradient != nullptr) *gradient = (prim.weight * fp * prim.inv_r_out) * gd;
+  return prim.weight * f;
+}
+
+// Whether p lies in the primitive's world box (a cheap reject before primitiveField).
+inline bool inBounds(const PosedPrimitive& prim, const glm::vec3& p) {
+  return p.x >= prim.bounds.min.x && p.x <= prim.bounds.max.x && p.y >= prim.bounds.min.y &&
+         p.y <= prim.bounds.max.y && p.z >= prim.bounds.min.z && p.z <= prim.bounds.max.z;
+}
+
+}  // namespace vistel

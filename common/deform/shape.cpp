@@ -1,0 +1,217 @@
+// Skeleton distances in closed form (Singh & Parent 1994 primitives; the cone-sphere's
+// ratio minimiser derived from d/dz [|p - c(z)|^2 / r(z)^2] = 0).
+#include "common/deform/shape.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace vistel {
+namespace {
+
+float cross2(const glm::vec2& a, const glm::vec2& b) { return a.x * b.y - a.y * b.x; }
+
+glm::vec3 polygonVertex(const Shape& s, int i) {
+  return s.a + s.polygon[static_cast<std::size_t>(i)].x * s.u +
+         s.polygon[static_cast<std::size_t>(i)].y * s.v;
+}
+
+float pointPolygonDistance(const Shape& s, const glm::vec3& p) {
+  const glm::vec3 r = p - s.a;
+  const glm::vec2 q(glm::dot(r, s.u), glm::dot(r, s.v));
+  const glm::vec2 c = closestInPolygon(s, q);
+  const float h = glm::dot(r, s.normal);
+  const glm::vec2 dq = q - c;
+  return std::sqrt(glm::dot(dq, dq) + h * h);
+}
+
+// Distance from a segment to a convex polygon region (exact; see skeletonGap).
+float segmentPolygonDistance(const glm::vec3& p0, const glm::vec3& p1, const Shape& s) {
+  // The segment may pierce the polygon.
+  const float h0 = glm::dot(p0 - s.a, s.normal);
+  const float h1 = glm::dot(p1 - s.a, s.normal);
+  if ((h0 <= 0.0f && h1 >= 0.0f) || (h0 >= 0.0f && h1 <= 0.0f)) {
+    if (h0 != h1) {
+      const glm::vec3 x = p0 + (h0 / (h0 - h1)) * (p1 - p0);
+      if (pointPolygonDistance(s, x) <= 1e-7f) return 0.0f;
+    }
+  }
+  // Otherwise the closest pair has an endpoint of the segment or lies on a polygon edge.
+  float best = std::min(pointPolygonDistance(s, p0), pointPolygonDistance(s, p1));
+  for (int i = 0; i < s.polygon_count; ++i) {
+    best =
+        std::min(best, segmentSegmentDistance(polygonVertex(s, i),
+                                              polygonVertex(s, (i + 1) % s.polygon_count), p0, p1));
+  }
+  return best;
+}
+
+}  // namespace
+
+void prepareShape(Shape& s) {
+  const glm::vec3 d = s.b - s.a;
+  s.length = glm::length(d);
+  s.axis = s.length > 0.0f ? d / s.length : glm::vec3(0.0f);
+  s.cone_slope = s.length > 0.0f ? (s.radius_b - s.radius_a) / s.length : 0.0f;
+  s.normal = glm::cross(s.u, s.v);
+}
+
+Shape transformShape(const Shape& shape, const glm::mat4& xform) {
+  Shape out = shape;
+  out.a = glm::vec3(xform * glm::vec4(shape.a, 1.0f));
+  out.b = glm::vec3(xform * glm::vec4(shape.b, 1.0f));
+  if (shape.kind == ShapeKind::kOffsetPolygon) {
+    const glm::mat3 rot(xform);
+    const glm::vec3 u = glm::normalize(rot * shape.u);
+    glm::vec3 v = rot * shape.v;
+    v = glm::normalize(v - glm::dot(v, u) * u);
+    out.u = u;
+    out.v = v;
+  }
+  prepareShape(out);
+  return out;
+}
+
+float pointSegmentDistance(const glm::vec3& p, const glm::vec3& a, const glm::vec3& b) {
+  const glm::vec3 ab = b - a;
+  const float ll = glm::dot(ab, ab);
+  const float t = ll > 0.0f ? std::clamp(glm::dot(p - a, ab) / ll, 0.0f, 1.0f) : 0.0f;
+  return glm::length(p - (a + t * ab));
+}
+
+float segmentSegmentDistance(const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& q0,
+                             const glm::vec3& q1) {
+  // Closest points of two segments (clamped parametric minimisation).
+  const glm::vec3 d1 = p1 - p0;
+  const glm::vec3 d2 = q1 - q0;
+  const glm::vec3 r = p0 - q0;
+  const float a = glm::dot(d1, d1);
+  const float e = glm::dot(d2, d2);
+  const float f = glm::dot(d2, r);
+  constexpr float kEps = 1e-12f;
+  float s = 0.0f;
+  float t = 0.0f;
+  if (a <= kEps && e <= kEps) return glm::length(r);
+  if (a <= kEps) {
+    t = std::clamp(f / e, 0.0f, 1.0f);
+  } else {
+    const float c = glm::dot(d1, r);
+    if (e <= kEps) {
+      s = std::clamp(-c / a, 0.0f, 1.0f);
+    } else {
+      const float b = glm::dot(d1, d2);
+      const float denom = a * e - b * b;
+      s = denom > kEps * a * e ? std::clamp((b * f - c * e) / denom, 0.0f, 1.0f) : 0.0f;
+      t = (b * s + f) / e;
+      if (t < 0.0f) {
+        t = 0.0f;
+        s = std::clamp(-c / a, 0.0f, 1.0f);
+      } else if (t > 1.0f) {
+        t = 1.0f;
+        s = std::clamp((b - c) / a, 0.0f, 1.0f);
+      }
+    }
+  }
+  return glm::length((p0 + s * d1) - (q0 + t * d2));
+}
+
+float metricReach(const Shape& s, float reach) {
+  if (s.kind == ShapeKind::kConeSphere) return reach * std::max(s.radius_a, s.radius_b);
+  return reach;
+}
+
+Bounds shapeBounds(const Shape& s, float reach) {
+  Bounds box;
+  const auto grow = [&box](const glm::vec3& c, float r, bool first) {
+    const glm::vec3 lo = c - glm::vec3(r);
+    const glm::vec3 hi = c + glm::vec3(r);
+    box.min = first ? lo : glm::min(box.min, lo);
+    box.max = first ? hi : glm::max(box.max, hi);
+  };
+  switch (s.kind) {
+    case ShapeKind::kSphere:
+      grow(s.a, reach, true);
+      break;
+    case ShapeKind::kSphylinder:
+      grow(s.a, reach, true);
+      grow(s.b, reach, false);
+      break;
+    case ShapeKind::kConeSphere:
+      grow(s.a, reach * s.radius_a, true);
+      grow(s.b, reach * s.radius_b, false);
+      break;
+    case ShapeKind::kOffsetPolygon:
+      for (int i = 0; i < s.polygon_count; ++i) grow(polygonVertex(s, i), reach, i == 0);
+      break;
+  }
+  return box;
+}
+
+float skeletonGap(const Shape& s1, const Shape& s2) {
+  // Order the pair so that s1's kind <= s2's kind (point < segment < polygon).
+  const auto rank = [](const Shape& s) {
+    return s.kind == ShapeKind::kSphere ? 0 : (s.kind == ShapeKind::kOffsetPolygon ? 2 : 1);
+  };
+  if (rank(s1) > rank(s2)) return skeletonGap(s2, s1);
+  const int r1 = rank(s1);
+  const int r2 = rank(s2);
+  if (r1 == 0 && r2 == 0) return glm::length(s1.a - s2.a);
+  if (r1 == 0 && r2 == 1) return pointSegmentDistance(s1.a, s2.a, s2.b);
+  if (r1 == 0) return pointPolygonDistance(s2, s1.a);
+  if (r1 == 1 && r2 == 1) return segmentSegmentDistance(s1.a, s1.b, s2.a, s2.b);
+  if (r1 == 1) return segmentPolygonDistance(s1.a, s1.b, s2);
+  // Two convex polygons: the closest pair (or a crossing) involves an edge of one of them.
+  float best = INFINITY;
+  for (int i = 0; i < s1.polygon_count; ++i) {
+    best =
+        std::min(best, segmentPolygonDistance(polygonVertex(s1, i),
+                                              polygonVertex(s1, (i + 1) % s1.polygon_count), s2));
+  }
+  for (int i = 0; i < s2.polygon_count; ++i) {
+    best =
+        std::min(best, segmentPolygonDistance(polygonVertex(s2, i),
+                                              polygonVertex(s2, (i + 1) % s2.polygon_count), s1));
+  }
+  return best;
+}
+
+const char* shapeProblem(const Shape& s) {
+  const auto finite3 = [](const glm::vec3& x) {
+    return std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.z);
+  };
+  if (!finite3(s.a) || !finite3(s.b) || !finite3(s.u) || !finite3(s.v)) {
+    return "non-finite coordinates";
+  }
+  switch (s.kind) {
+    case ShapeKind::kSphere:
+    case ShapeKind::kSphylinder:
+      return "";
+    case ShapeKind::kConeSphere:
+      if (!(s.radius_a > 0.0f) || !(s.radius_b > 0.0f) || !std::isfinite(s.radius_a) ||
+          !std::isfinite(s.radius_b)) {
+        return "cone-sphere radii must be positive and finite";
+      }
+      return "";
+    case ShapeKind::kOffsetPolygon: {
+      if (std::abs(glm::length(s.u) - 1.0f) > 1e-3f || std::abs(glm::length(s.v) - 1.0f) > 1e-3f ||
+          std::abs(glm::dot(s.u, s.v)) > 1e-3f) {
+        return "polygon axes must be unit and orthogonal";
+      }
+      if (s.polygon_count < 3 || s.polygon_count > kMaxPolygonVertices) {
+        return "polygon must have 3..8 vertices";
+      }
+      for (int i = 0; i < s.polygon_count; ++i) {
+        const glm::vec2 p0 = s.polygon[static_cast<std::size_t>(i)];
+        const glm::vec2 p1 = s.polygon[static_cast<std::size_t>((i + 1) % s.polygon_count)];
+        const glm::vec2 p2 = s.polygon[static_cast<std::size_t>((i + 2) % s.polygon_count)];
+        if (!std::isfinite(p0.x) || !std::isfinite(p0.y)) return "non-finite polygon vertex";
+        if (!(cross2(p1 - p0, p2 - p1) > 0.0f)) {
+          return "polygon must be convex and counter-clockwise";
+        }
+      }
+      return "";
+    }
+  }
+  return "unknown shape kind";
+}
+
+}  // namespace vistel

@@ -1,0 +1,90 @@
+// The per-vertex function D_v (DESIGN.md §3 "Per-vertex function"), shared by Step 2,
+// calibration and tests:
+//   limb vertex:  D_v(P) = F_p0(P)                       (+ F_bone(P))
+//   joint vertex: D_v(P) = F_p0(P) + DIFF(F_p1, F_p2)(P)  (+ F_bone(P)), p0 the joint
+//   DIFF(a, b) = |a^n - b^n|^(1/n): near zero where the two limbs' fields are equal, which
+//   pulls the surface in and forms the crease.
+// Free vertices have no D_v (their own field is planar, see VertexClass::kFree).
+#pragma once
+
+#include <cmath>
+
+#include <glm/glm.hpp>
+
+#include "common/deform/implicit_model.hpp"
+#include "common/deform/posed_primitives.hpp"
+
+namespace vistel {
+
+// a^n for small positive integer n.
+inline float powInt(float a, int n) {
+  float r = 1.0f;
+  for (int i = 0; i < n; ++i) r *= a;
+  return r;
+}
+
+// DIFF(a, b) with gradient from the two fields' gradients.
+inline float diffField(float a, const glm::vec3& ga, float b, const glm::vec3& gb, int n,
+                       glm::vec3* gradient) {
+  const float an1 = powInt(a, n - 1);
+  const float bn1 = powInt(b, n - 1);
+  const float x = an1 * a - bn1 * b;
+  const float ax = std::abs(x);
+  float d;
+  if (n == 1) {
+    d = ax;
+  } else if (n == 2) {
+    d = std::sqrt(ax);
+  } else if (n == 4) {
+    d = std::sqrt(std::sqrt(ax));
+  } else {
+    d = std::pow(ax, 1.0f / static_cast<float>(n));
+  }
+  if (gradient != nullptr) {
+    // d/da = a^(n-1) d / x (sign included); singular where x = 0 (there d = 0).
+    *gradient = x != 0.0f ? (d / x) * (an1 * ga - bn1 * gb) : glm::vec3(0.0f);
+  }
+  return d;
+}
+
+// D_v(P) of a limb or joint vertex from its primitives' posed copies (no w_v).
+inline float vertexDensity(VertexClass cls, const PosedPrimitive* p0, const PosedPrimitive* p1,
+                           const PosedPrimitive* p2, const PosedPrimitive* bone, int diff_exponent,
+                           const glm::vec3& p, glm::vec3* gradient) {
+  glm::vec3 g0(0.0f);
+  float d = primitiveField(*p0, p, gradient != nullptr ? &g0 : nullptr);
+  if (cls == VertexClass::kJoint) {
+    glm::vec3 ga(0.0f), gb(0.0f), gd(0.0f);
+    const float fa = primitiveField(*p1, p, gradient != nullptr ? &ga : nullptr);
+    const float fb = primitiveField(*p2, p, gradient != nullptr ? &gb : nullptr);
+    d += diffField(fa, ga, fb, gb, diff_exponent, gradient != nullptr ? &gd : nullptr);
+    g0 += gd;
+  }
+  if (bone != nullptr) {
+    glm::vec3 gbone(0.0f);
+    d += primitiveField(*bone, p, gradient != nullptr ? &gbone : nullptr);
+    g0 += gbone;
+  }
+  if (gradient != nullptr) *gradient = g0;
+  return d;
+}
+
+// Convenience for calibration and tests: D_v of vertex v of a model, primitives posed.
+// Returns 0 for free vertices.
+inline float vertexDensity(const ImplicitModel& model, const PosedPrimitives& posed, int v,
+                           const glm::vec3& p, glm::vec3* gradient = nullptr) {
+  const Calibration& c = model.calibration;
+  const auto& pr = c.prims[static_cast<std::size_t>(v)];
+  const VertexClass cls = c.vertex_class[static_cast<std::size_t>(v)];
+  if (cls == VertexClass::kFree) {
+    if (gradient != nullptr) *gradient = glm::vec3(0.0f);
+    return 0.0f;
+  }
+  const auto at = [&](std::int16_t i) {
+    return i >= 0 ? &posed.items[static_cast<std::size_t>(i)] : nullptr;
+  };
+  return vertexDensity(cls, at(pr[0]), at(pr[1]), at(pr[2]), at(pr[3]),
+                       model.primitives.diff_exponent, p, gradient);
+}
+
+}  // namespace vistel

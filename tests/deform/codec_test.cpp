@@ -1,0 +1,101 @@
+// The implicit model's bytes: round trip bit-identical, every prefix and corruption
+// rejected with an error (no crash).
+#include <cstring>
+
+#include <gtest/gtest.h>
+
+#include "common/deform/implicit_codec.hpp"
+#include "tests/deform/fixtures.hpp"
+
+namespace vistel {
+namespace {
+
+TEST(Codec, RoundTripIsBitIdentical) {
+  auto arm = test::armBody();
+  const ImplicitModel& m = arm->model;
+  const std::vector<std::uint8_t> bytes = encodeImplicitModel(m);
+  Result<ImplicitModel> back =
+      decodeImplicitModel(bytes, arm->skeleton.jointCount(), arm->mesh.vertexCount());
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(encodeImplicitModel(*back), bytes);
+  ASSERT_EQ(back->primitives.items.size(), m.primitives.items.size());
+  for (std::size_t i = 0; i < m.primitives.items.size(); ++i) {
+    const Primitive& a = m.primitives.items[i];
+    const Primitive& b = back->primitives.items[i];
+    EXPECT_EQ(a.name, b.name);
+    EXPECT_EQ(std::memcmp(&a.shape.a, &b.shape.a, sizeof(glm::vec3)), 0);
+    EXPECT_EQ(a.shape.length, b.shape.length);
+    EXPECT_EQ(a.r_in, b.r_in);
+    EXPECT_EQ(a.weight, b.weight);
+  }
+  EXPECT_EQ(back->graph.collide_matrix, m.graph.collide_matrix);
+  EXPECT_EQ(back->calibration.w, m.calibration.w);
+  EXPECT_EQ(back->calibration.ring, m.calibration.ring);
+  // A rigid ball's infinite stiffness survives.
+  Result<BallBody> ball = makeBall(BallSpec{});
+  ASSERT_TRUE(ball.ok());
+  const auto ball_bytes = encodeImplicitModel(ball->model);
+  Result<ImplicitModel> ball_back = decodeImplicitModel(ball_bytes, 1, ball->mesh.vertexCount());
+  ASSERT_TRUE(ball_back.ok()) << ball_back.error().message;
+  EXPECT_TRUE(std::isinf(ball_back->primitives.items[0].stiffness));
+}
+
+TEST(Codec, EveryPrefixFailsCleanly) {
+  auto arm = test::armBody();
+  const std::vector<std::uint8_t> bytes = encodeImplicitModel(arm->model);
+  // Every prefix of the primitive section and the graph; a sample of the calibration's.
+  for (std::size_t n = 0; n < bytes.size(); n += (n < 4000 ? 1 : 97)) {
+    Result<ImplicitModel> r =
+        decodeImplicitModel(std::span(bytes).first(n), 3, arm->mesh.vertexCount());
+    ASSERT_FALSE(r.ok()) << "prefix " << n;
+    EXPECT_FALSE(r.error().message.empty());
+  }
+  // Trailing bytes are an error too.
+  std::vector<std::uint8_t> longer = bytes;
+  longer.push_back(0);
+  EXPECT_FALSE(decodeImplicitModel(longer, 3, arm->mesh.vertexCount()).ok());
+}
+
+TEST(Codec, CorruptValuesAreRejectedWithReasons) {
+  auto arm = test::armBody();
+  const int nv = arm->mesh.vertexCount();
+  {
+    ImplicitModel m = arm->model;
+    m.primitives.items[1].bone = 7;
+    const auto r = decodeImplicitModel(encodeImplicitModel(m), 3, nv);
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().message.find("bone out of range"), std::string::npos) << r.error().message;
+  }
+  {
+    ImplicitModel m = arm->model;
+    m.primitives.items[0].r_in = std::nanf("");
+    EXPECT_FALSE(decodeImplicitModel(encodeImplicitModel(m), 3, nv).ok());
+  }
+  {
+    ImplicitModel m = arm->model;
+    m.calibration.prims[5][0] = 99;
+    const auto r = decodeImplicitModel(encodeImplicitModel(m), 3, nv);
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().message.find("vertex 5"), std::string::npos) << r.error().message;
+  }
+  {
+    ImplicitModel m = arm->model;
+    m.calibration.ring[3] = static_cast<std::uint32_t>(nv + 4);
+    EXPECT_FALSE(decodeImplicitModel(encodeImplicitModel(m), 3, nv).ok());
+  }
+  // A different skin.
+  EXPECT_FALSE(decodeImplicitModel(encodeImplicitModel(arm->model), 3, nv + 1).ok());
+  // Random byte flips never crash (they fail or decode to a valid model).
+  std::vector<std::uint8_t> bytes = encodeImplicitModel(arm->model);
+  for (std::size_t i = 0; i < 3000 && i < bytes.size(); i += 7) {
+    std::vector<std::uint8_t> b = bytes;
+    b[i] ^= 0xA5;
+    Result<ImplicitModel> r = decodeImplicitModel(b, 3, nv);
+    if (r.ok()) {
+      EXPECT_TRUE(validateImplicitModel(*r, 3, nv).ok());
+    }
+  }
+}
+
+}  // namespace
+}  // namespace vistel

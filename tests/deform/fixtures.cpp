@@ -1,0 +1,186 @@
+#include "tests/deform/fixtures.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "common/deform/posed_primitives.hpp"
+
+namespace vistel::test {
+
+std::string armMapToml(std::string_view material) {
+  return fmt::format(R"(
+iso = 0.5
+[material]
+{}
+[[primitive]]
+name = "upper"
+shape = "cone_sphere"
+bone = "upper"
+from = "upper"
+to = "fore"
+[[primitive]]
+name = "fore"
+shape = "cone_sphere"
+bone = "fore"
+from = "fore"
+to = "tip"
+[[primitive]]
+name = "elbow"
+role = "joint"
+shape = "sphere"
+bone = "fore"
+at = "fore"
+between = ["upper", "fore"]
+[[primitive]]
+name = "elbow_bone"
+role = "bone"
+shape = "sphere"
+bone = "fore"
+at = "fore"
+blend = "elbow"
+offset = [0.0, -1.0, 0.0]
+depth = 0.6
+)",
+                     material);
+}
+
+AvatarModel makeArmAvatar(float length, float radius, float blend, int rings, int sides) {
+  AvatarModel a;
+  a.name = "arm";
+  Skeleton& s = a.skeleton;
+  s.names = {"upper", "fore", "tip"};
+  s.parents = {kNoParent, 0, 1};
+  s.rest_local.resize(3);
+  s.rest_local[1].translation = glm::vec3(length, 0.0f, 0.0f);
+  s.rest_local[2].translation = glm::vec3(length, 0.0f, 0.0f);
+  computeInverseBind(s);
+  SkinMesh& m = a.skin;
+  m.influences = 2;
+  const auto add_vertex = [&](glm::vec3 p, glm::vec3 n) {
+    m.positions.push_back(p);
+    m.normals.push_back(n);
+    const float t = std::clamp((p.x - (length - blend)) / (2.0f * blend), 0.0f, 1.0f);
+    m.joints.insert(m.joints.end(), {0, 1});
+    m.weights.insert(m.weights.end(), {1.0f - t, t});
+  };
+  for (int i = 0; i <= rings; ++i) {
+    const float x = 2.0f * length * static_cast<float>(i) / static_cast<float>(rings);
+    for (int k = 0; k < sides; ++k) {
+      const float ang =
+          2.0f * std::numbers::pi_v<float> * static_cast<float>(k) / static_cast<float>(sides);
+      const glm::vec3 n(0.0f, std::cos(ang), std::sin(ang));
+      add_vertex(glm::vec3(x, 0.0f, 0.0f) + radius * n, n);
+    }
+  }
+  const auto ring = [&](int i, int k) {
+    return static_cast<std::uint32_t>(i * sides + (k % sides));
+  };
+  for (int i = 0; i < rings; ++i) {
+    for (int k = 0; k < sides; ++k) {
+      m.indices.insert(m.indices.end(), {ring(i, k), ring(i, k + 1), ring(i + 1, k + 1)});
+      m.indices.insert(m.indices.end(), {ring(i, k), ring(i + 1, k + 1), ring(i + 1, k)});
+    }
+  }
+  const auto c0 = static_cast<std::uint32_t>(m.positions.size());
+  add_vertex(glm::vec3(0.0f), glm::vec3(-1, 0, 0));
+  const auto c1 = static_cast<std::uint32_t>(m.positions.size());
+  add_vertex(glm::vec3(2.0f * length, 0.0f, 0.0f), glm::vec3(1, 0, 0));
+  for (int k = 0; k < sides; ++k) {
+    m.indices.insert(m.indices.end(), {c0, ring(0, k + 1), ring(0, k)});
+    m.indices.insert(m.indices.end(), {c1, ring(rings, k), ring(rings, k + 1)});
+  }
+  return a;
+}
+
+void Body::init() {
+  const auto nj = static_cast<std::size_t>(skeleton.jointCount());
+  model_xf.resize(nj);
+  skin_xf.resize(nj);
+  dq.resize(nj);
+  rigid_pos.resize(mesh.positions.size());
+  rigid_nrm.resize(mesh.positions.size());
+  if (posture.rotations.empty()) posture = restPosture(skeleton);
+  const Status st = initDeformState(model, mesh.indices, state);
+  EXPECT_TRUE(st.ok()) << (st.ok() ? "" : st.error().message);
+}
+
+void Body::pose() {
+  poseSkeleton(skeleton, posture, model_xf);
+  skinningMatrices(skeleton, model_xf, skin_xf);
+  for (glm::mat4& m : skin_xf) m = placement * m;
+  skinMesh(mesh, SkinningMethod::kDualQuaternion, skin_xf, dq, rigid_pos, rigid_nrm);
+  posePrimitives(model.primitives, skin_xf, posed);
+}
+
+DeformInput Body::input(double time) const {
+  DeformInput in;
+  in.rigid_positions = rigid_pos;
+  in.rigid_normals = rigid_nrm;
+  in.indices = mesh.indices;
+  in.time = time;
+  return in;
+}
+
+std::unique_ptr<Body> armBody(std::string_view material) {
+  auto b = std::make_unique<Body>();
+  AvatarModel avatar = makeArmAvatar();
+  b->name = "arm";
+  b->skeleton = avatar.skeleton;
+  b->mesh = avatar.skin;
+  Result<PrimitiveMapSpec> spec = parsePrimitiveMap(armMapToml(material), "arm.toml");
+  EXPECT_TRUE(spec.ok()) << (spec.ok() ? "" : spec.error().message);
+  Result<ImplicitModel> model = buildImplicitModel(avatar, *spec, nullptr);
+  EXPECT_TRUE(model.ok()) << (model.ok() ? "" : model.error().message);
+  b->model = std::move(*model);
+  b->init();
+  return b;
+}
+
+std::unique_ptr<Body> ballBody(const BallSpec& spec, const glm::vec3& centre) {
+  auto b = std::make_unique<Body>();
+  Result<BallBody> ball = makeBall(spec);
+  EXPECT_TRUE(ball.ok()) << (ball.ok() ? "" : ball.error().message);
+  b->name = "ball";
+  b->skeleton = ball->skeleton;
+  b->mesh = ball->mesh;
+  b->model = std::move(ball->model);
+  b->placement = glm::translate(glm::mat4(1.0f), centre);
+  b->init();
+  return b;
+}
+
+void Scene::step(double time) {
+  views.resize(bodies.size());
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    bodies[i]->pose();
+    views[i] = BodyView{&bodies[i]->model.graph, &bodies[i]->posed};
+  }
+  buildInteractions(views, scratch, list);
+  states.assign(bodies.size(), nullptr);
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    Body& b = *bodies[i];
+    if (!b.deform) continue;
+    deformSkin(b.model, views, static_cast<int>(i), list, b.input(time), b.state, options, pool);
+    states[i] = &b.state;
+  }
+  combineContacts(states, contacts);
+}
+
+void bendArm(Body& arm, float angle) {
+  arm.posture.rotations[1] = glm::angleAxis(angle, glm::vec3(0.0f, 0.0f, 1.0f));
+}
+
+float maxDisplacement(const Body& b) {
+  float m = 0.0f;
+  for (std::size_t v = 0; v < b.rigid_pos.size(); ++v) {
+    m = std::max(m, glm::length(b.state.positions[v] - b.rigid_pos[v]));
+  }
+  return m;
+}
+
+}  // namespace vistel::test

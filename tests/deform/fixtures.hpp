@@ -1,0 +1,74 @@
+// Test bodies and a small scene runner for the deformable component: a two-bone skinned
+// tube "arm" (as tests/anim/skinning_test.cpp), balls, and real avatars when present.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "common/anim/posture.hpp"
+#include "common/anim/skinning.hpp"
+#include "common/avatar/avatar_model.hpp"
+#include "common/deform/deform.hpp"
+#include "common/deform/interactions.hpp"
+#include "common/deform/prop.hpp"
+#include "offline/build/build_model.hpp"
+
+namespace vistel::test {
+
+// The arm's primitive map: cone-spheres for the two bones, an elbow sphere and an elbow
+// bone on the outside of the bend (-Y; the forearm bends towards +Y about +Z).
+std::string armMapToml(std::string_view material = "");
+
+// A tube along +X: upper arm 0..L (joint "upper"), forearm L..2L (joint "fore"), an end
+// joint "tip" at 2L; weights blend linearly across the elbow over +-blend.
+AvatarModel makeArmAvatar(float length = 0.3f, float radius = 0.04f, float blend = 0.06f,
+                          int rings = 60, int sides = 24);
+
+// One body of a test scene: static parts, its posture and placement, per-frame buffers.
+struct Body {
+  std::string name;
+  Skeleton skeleton;
+  SkinMesh mesh;
+  ImplicitModel model;
+  glm::mat4 placement{1.0f};
+  Posture posture;
+  bool deform = true;  // run Steps 2-3 on it
+
+  std::vector<glm::mat4> model_xf, skin_xf;
+  std::vector<DualQuat> dq;
+  std::vector<glm::vec3> rigid_pos, rigid_nrm;
+  PosedPrimitives posed;
+  DeformState state;
+
+  void init();  // sizes the buffers and the deform state
+  void pose();  // rigid component + posed primitives
+  DeformInput input(double time) const;
+};
+
+std::unique_ptr<Body> armBody(std::string_view material = "");
+std::unique_ptr<Body> ballBody(const BallSpec& spec, const glm::vec3& centre);
+
+// Bodies stepped together: pose all, Step 1 across them, Steps 2-3 on each.
+struct Scene {
+  std::vector<Body*> bodies;
+  std::vector<BodyView> views;
+  InteractionScratch scratch;
+  InteractionList list;
+  std::vector<PairContact> contacts;
+  std::vector<const DeformState*> states;
+  DeformOptions options;
+  TaskPool* pool = nullptr;
+
+  void step(double time);
+};
+
+// Elbow flexion of the arm (radians, about +Z: the forearm turns towards +Y).
+void bendArm(Body& arm, float angle);
+
+// Largest |deformed - rigid| over a body's vertices.
+float maxDisplacement(const Body& b);
+
+}  // namespace vistel::test

@@ -1,0 +1,277 @@
+// The deformable component on real avatars: the default avatar and the shared MakeHuman
+// body (skipped when absent), with the default humanoid map, posed by the shared clips.
+#include <map>
+#include <memory>
+
+#include <gtest/gtest.h>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "common/base/hash.hpp"
+#include "common/deform/mesh_quality.hpp"
+#include "common/deform/vertex_field.hpp"
+#include "common/motion/bvh.hpp"
+#include "common/motion/joint_map.hpp"
+#include "common/motion/retarget.hpp"
+#include "offline/gltf/gltf_import.hpp"
+#include "offline/synth/default_avatar.hpp"
+#include "tests/deform/fixtures.hpp"
+#include "tests/support/test_support.hpp"
+
+namespace vistel {
+namespace {
+
+struct Avatar {
+  AvatarModel avatar;
+  const JointMap* map = nullptr;
+  std::vector<JointMap> maps;
+  BuildReport report;
+};
+
+// Built once per binary run (importing and building take a fraction of a second).
+const Avatar* loadAvatar(const std::string& which) {
+  static std::map<std::string, std::unique_ptr<Avatar>> cache;
+  auto& slot = cache[which];
+  if (slot) return slot.get();
+  auto a = std::make_unique<Avatar>();
+  Result<AvatarModel> avatar =
+      which == "makehuman"
+          ? importGltfAvatar(test::sharedDataPath("avatars/makehuman_game_engine.glb"))
+          : makeDefaultAvatar();
+  if (!avatar) {
+    ADD_FAILURE() << avatar.error().message;
+    return nullptr;
+  }
+  a->avatar = std::move(*avatar);
+  Result<std::vector<JointMap>> maps = loadJointMaps();
+  if (!maps) {
+    ADD_FAILURE() << maps.error().message;
+    return nullptr;
+  }
+  a->maps = std::move(*maps);
+  Result<const JointMap*> map = selectJointMap(a->maps, a->avatar.skeleton);
+  if (!map) {
+    ADD_FAILURE() << map.error().message;
+    return nullptr;
+  }
+  a->map = *map;
+  slot = std::move(a);
+  return slot.get();
+}
+
+std::unique_ptr<test::Body> bodyOf(const Avatar& a, BuildReport* report = nullptr) {
+  Result<PrimitiveMapSpec> spec = loadPrimitiveMap();
+  EXPECT_TRUE(spec.ok()) << (spec.ok() ? "" : spec.error().message);
+  Result<ImplicitModel> model = buildImplicitModel(a.avatar, *spec, a.map, {}, report);
+  EXPECT_TRUE(model.ok()) << (model.ok() ? "" : model.error().message);
+  auto b = std::make_unique<test::Body>();
+  b->skeleton = a.avatar.skeleton;
+  b->mesh = a.avatar.skin;
+  b->model = std::move(*model);
+  b->init();
+  return b;
+}
+
+#define VISTEL_MAKEHUMAN(var)                                             \
+  VISTEL_REQUIRE_SHARED(var##_path, "avatars/makehuman_game_engine.glb"); \
+  const Avatar* var = loadAvatar("makehuman");                            \
+  ASSERT_NE(var, nullptr)
+
+void restChecks(const Avatar& a) {
+  BuildReport report;
+  auto b = bodyOf(a, &report);
+  EXPECT_EQ(report.primitives.size(), 30u) << "the default map's 30 primitives";
+  for (const std::string& w : report.warnings) ADD_FAILURE() << w;
+  // Calibration: every limb and joint vertex on its surface at rest.
+  PosedPrimitives rest;
+  std::vector<glm::mat4> identity(static_cast<std::size_t>(b->skeleton.jointCount()),
+                                  glm::mat4(1.0f));
+  posePrimitives(b->model.primitives, identity, rest);
+  for (int v = 0; v < b->mesh.vertexCount(); ++v) {
+    if (b->model.calibration.vertex_class[static_cast<std::size_t>(v)] == VertexClass::kFree)
+      continue;
+    const float f =
+        b->model.calibration.w[static_cast<std::size_t>(v)] *
+        vertexDensity(b->model, rest, v, b->mesh.positions[static_cast<std::size_t>(v)]);
+    ASSERT_NEAR(f, b->model.primitives.iso, 1e-5f) << a.avatar.name << " vertex " << v;
+  }
+  // Rest posture, nothing touching: nothing moves.
+  test::Scene scene;
+  scene.bodies = {b.get()};
+  scene.step(0.0);
+  EXPECT_LT(test::maxDisplacement(*b), 1e-5f);
+  EXPECT_EQ(b->state.counters.unsolved_vertices, 0);
+  EXPECT_EQ(b->state.counters.contact_vertices, 0);
+}
+
+TEST(RealAvatars, DefaultAvatarRestsExactly) {
+  const Avatar* a = loadAvatar("default");
+  ASSERT_NE(a, nullptr);
+  restChecks(*a);
+}
+
+TEST(RealAvatars, MakehumanRestsExactly) {
+  VISTEL_MAKEHUMAN(a);
+  restChecks(*a);
+}
+
+// Vertices and faces owned by the given primitives (joint vertices excluded).
+struct Part {
+  std::vector<std::uint32_t> vertices, faces;
+};
+Part part(const test::Body& b, std::initializer_list<const char*> names) {
+  std::vector<int> ids;
+  for (const char* n : names) {
+    for (std::size_t i = 0; i < b.model.primitives.items.size(); ++i) {
+      if (b.model.primitives.items[i].name == n) ids.push_back(static_cast<int>(i));
+    }
+  }
+  const auto owned = [&](std::uint32_t v) {
+    const Calibration& c = b.model.calibration;
+    if (c.vertex_class[v] == VertexClass::kJoint) return false;
+    return std::find(ids.begin(), ids.end(), c.prims[v][0]) != ids.end();
+  };
+  Part p;
+  for (std::uint32_t v = 0; v < b.mesh.positions.size(); ++v) {
+    if (owned(v)) p.vertices.push_back(v);
+  }
+  const auto& ix = b.mesh.indices;
+  for (std::uint32_t f = 0; f < ix.size() / 3; ++f) {
+    if (owned(ix[3 * f]) && owned(ix[3 * f + 1]) && owned(ix[3 * f + 2])) p.faces.push_back(f);
+  }
+  return p;
+}
+
+// Deepest penetration between two parts (both ways), rigid and deformed.
+std::pair<float, float> penetration(const test::Body& b, const Part& x, const Part& y) {
+  const auto depth = [&](std::span<const glm::vec3> pos) {
+    return std::max(penetrationDepth(pos, b.mesh.indices, y.faces, x.vertices, 0.1f),
+                    penetrationDepth(pos, b.mesh.indices, x.faces, y.vertices, 0.1f));
+  };
+  return {depth(b.rigid_pos), depth(b.state.positions)};
+}
+
+// Total elbow flexion of the left arm (angle between upper arm and forearm directions).
+void flexLeftElbow(test::Body& b, const JointMap& map, float degrees) {
+  const Skeleton& sk = b.skeleton;
+  const int ju = sk.find(map.jointFor("l_upperarm"));
+  const int jl = sk.find(map.jointFor("l_forearm"));
+  const int jh = sk.find(map.jointFor("l_hand"));
+  const std::vector<glm::mat4> rest = restModelTransforms(sk);
+  const glm::vec3 pu(rest[static_cast<std::size_t>(ju)][3]),
+      pl(rest[static_cast<std::size_t>(jl)][3]), ph(rest[static_cast<std::size_t>(jh)][3]);
+  const glm::vec3 u = glm::normalize(pl - pu), f = glm::normalize(ph - pl);
+  glm::vec3 axis = glm::cross(u, f);
+  if (glm::length(axis) < 0.1f)
+    axis = glm::cross(f, glm::vec3(0.0f, 0.0f, 1.0f));  // straight arm: forward
+  axis = glm::normalize(axis);
+  const float rest_flexion = std::acos(std::clamp(glm::dot(u, f), -1.0f, 1.0f));
+  const glm::quat parent = glm::quat_cast(
+      glm::mat3(rest[static_cast<std::size_t>(sk.parents[static_cast<std::size_t>(jl)])]));
+  b.posture = restPosture(sk);
+  b.posture.rotations[static_cast<std::size_t>(jl)] = glm::normalize(
+      glm::inverse(parent) * glm::angleAxis(glm::radians(degrees) - rest_flexion, axis) * parent *
+      b.posture.rotations[static_cast<std::size_t>(jl)]);
+}
+
+TEST(RealAvatars, MakehumanForcedElbowFlexion) {
+  VISTEL_MAKEHUMAN(a);
+  auto b = bodyOf(*a);
+  const Part upper = part(*b, {"l_upperarm"});
+  const Part fore = part(*b, {"l_forearm"});
+  for (float degrees : {120.0f, 150.0f}) {
+    flexLeftElbow(*b, *a->map, degrees);
+    test::Scene scene;
+    scene.bodies = {b.get()};
+    scene.step(0.0);
+    const auto [rigid, deformed] = penetration(*b, upper, fore);
+    const int inverted = countInvertedFaces(b->rigid_pos, b->state.positions, b->mesh.indices);
+    std::printf(
+        "makehuman elbow %.0f deg: forearm/upper-arm penetration rigid %.4f m, deformed %.4f m; "
+        "unsolved %d; inverted faces %d\n",
+        degrees, rigid, deformed, b->state.counters.unsolved_vertices, inverted);
+    if (degrees == 120.0f) {
+      EXPECT_GE(rigid, 0.01f);
+      EXPECT_LE(deformed, 0.001f);
+    }
+    EXPECT_LE(b->state.counters.unsolved_vertices, 10);
+  }
+}
+
+// Frames of the shared clips where a retargeted forearm or hand sinks into the trunk (the
+// clip's actor is slimmer than the avatar: the hands swing through the hips).
+TEST(RealAvatars, MakehumanClipSelfContact) {
+  VISTEL_MAKEHUMAN(a);
+  auto b = bodyOf(*a);
+  const Part arms = part(*b, {"l_forearm", "r_forearm", "l_hand", "r_hand"});
+  const Part trunk = part(*b, {"torso", "pelvis", "head"});
+  const std::vector<std::pair<std::string, int>> frames = {{"mocap/cmu/01_01.bvh", 1145},
+                                                           {"mocap/cmu/01_01.bvh", 2519}};
+  int checked = 0;
+  for (const auto& [clip_name, frame] : frames) {
+    const std::string path = test::sharedDataPath(clip_name);
+    Result<MotionClip> clip = loadBvh(path);
+    if (!clip) continue;  // the clip is absent: nothing to check
+    const Skeleton cs = clipSkeleton(*clip);
+    Result<const JointMap*> cmap = selectJointMap(a->maps, cs);
+    ASSERT_TRUE(cmap.ok()) << cmap.error().message;
+    Result<Retargeter> rt = Retargeter::create(cs, **cmap, b->skeleton, *a->map);
+    ASSERT_TRUE(rt.ok()) << rt.error().message;
+    Posture src;
+    samplePosture(*clip, frame, src);
+    rt->apply(src, b->posture);
+    test::Scene scene;
+    scene.bodies = {b.get()};
+    scene.step(0.0);
+    const auto [rigid, deformed] = penetration(*b, arms, trunk);
+    std::printf("%s frame %d: arms/trunk penetration rigid %.4f m, deformed %.4f m; contact %d\n",
+                clip_name.c_str(), frame, rigid, deformed, b->state.counters.contact_vertices);
+    EXPECT_GE(rigid, 0.01f) << clip_name << " " << frame;
+    EXPECT_LE(deformed, 0.001f) << clip_name << " " << frame;
+    ++checked;
+  }
+  if (checked == 0) GTEST_SKIP() << "no shared clip found";
+}
+
+// Replaying a clip with a ball gives the same deformed vertices with 1 and 2 threads.
+std::uint64_t replayMakehuman(const Avatar& a, TaskPool* pool) {
+  auto b = bodyOf(a);
+  BallSpec spec;
+  spec.radius = 0.09f;
+  spec.stiffness = 2.0e4f;
+  auto ball = test::ballBody(spec, glm::vec3(0.0f));
+  Result<MotionClip> clip = loadBvh(test::sharedDataPath("mocap/cmu/01_01.bvh"));
+  EXPECT_TRUE(clip.ok());
+  const Skeleton cs = clipSkeleton(*clip);
+  Result<const JointMap*> cmap = selectJointMap(a.maps, cs);
+  Result<Retargeter> rt = Retargeter::create(cs, **cmap, b->skeleton, *a.map);
+  test::Scene scene;
+  scene.bodies = {b.get(), ball.get()};
+  scene.pool = pool;
+  scene.options.chunk_size = 256;
+  Posture src;
+  std::uint64_t h = kFnvOffset;
+  for (int k = 0; k < 8; ++k) {
+    samplePosture(*clip, 1100 + 4 * k, src);
+    rt->apply(src, b->posture);
+    // The ball in front of the chest, pressing in.
+    const int chest = b->skeleton.find(a.map->jointFor("chest"));
+    b->pose();
+    const glm::vec3 c(b->model_xf[static_cast<std::size_t>(chest)][3]);
+    ball->placement = glm::translate(glm::mat4(1.0f), c + glm::vec3(0.0f, 0.0f, 0.16f));
+    scene.step(k / 30.0);
+    h = hashSpan<glm::vec3>(b->state.positions, h);
+    h = hashSpan<glm::vec3>(ball->state.positions, h);
+  }
+  EXPECT_GT(b->state.counters.contact_vertices, 0);
+  return h;
+}
+
+TEST(RealAvatars, MakehumanReplaySameHashWithOneAndTwoThreads) {
+  VISTEL_MAKEHUMAN(a);
+  VISTEL_REQUIRE_SHARED(clip_path, "mocap/cmu/01_01.bvh");
+  TaskPool two(2);
+  EXPECT_EQ(replayMakehuman(*a, nullptr), replayMakehuman(*a, &two));
+}
+
+}  // namespace
+}  // namespace vistel
