@@ -3,11 +3,13 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <optional>
 
 #include <openssl/evp.h>
 
 #include "common/base/bytes.hpp"
 #include "common/base/file.hpp"
+#include "common/deform/implicit_codec.hpp"
 
 namespace vistel {
 namespace {
@@ -139,10 +141,21 @@ std::vector<std::uint8_t> encodeAvatar(const AvatarModel& avatar) {
   ByteWriter w(out);
   w.raw(kMagic, sizeof kMagic);
   w.u32(kAvatarFormatVersion);
-  w.u32(3);
+  w.u32(avatar.implicit ? 6 : 3);
   writeChunk(w, "META", meta);
   writeChunk(w, "SKEL", encodeSkeleton(avatar.skeleton));
   writeChunk(w, "SKIN", encodeSkin(avatar.skin));
+  if (avatar.implicit) {
+    // The deformable component: primitives, combination graph, calibration.
+    std::vector<std::uint8_t> prim, graph, calib;
+    ByteWriter wp(prim), wg(graph), wc(calib);
+    encodePrimitiveSet(avatar.implicit->primitives, wp);
+    encodeCombinationGraph(avatar.implicit->graph, wg);
+    encodeCalibration(avatar.implicit->calibration, wc);
+    writeChunk(w, "PRIM", prim);
+    writeChunk(w, "GRPH", graph);
+    writeChunk(w, "CALB", calib);
+  }
   return out;
 }
 
@@ -164,6 +177,7 @@ Result<AvatarModel> decodeAvatar(std::span<const std::uint8_t> bytes, std::strin
   AvatarModel avatar;
   bool have_meta = false, have_skel = false, have_skin = false;
   std::span<const std::uint8_t> skin_payload;
+  std::optional<std::span<const std::uint8_t>> prim_payload, graph_payload, calib_payload;
   for (std::uint32_t c = 0; c < chunks; ++c) {
     // Read and check one chunk.
     const std::size_t at = r.offset();
@@ -196,6 +210,12 @@ Result<AvatarModel> decodeAvatar(std::span<const std::uint8_t> bytes, std::strin
     } else if (name == "SKIN") {
       skin_payload = payload;
       have_skin = true;
+    } else if (name == "PRIM") {
+      prim_payload = payload;
+    } else if (name == "GRPH") {
+      graph_payload = payload;
+    } else if (name == "CALB") {
+      calib_payload = payload;
     }
   }
   if (r.remaining() != 0) return fail("{}: {} bytes after the last chunk", source, r.remaining());
@@ -206,6 +226,23 @@ Result<AvatarModel> decodeAvatar(std::span<const std::uint8_t> bytes, std::strin
   auto skin = decodeSkin(skin_payload, avatar.skeleton.jointCount());
   if (!skin) return fail("{}: chunk 'SKIN': {}", source, skin.error().message);
   avatar.skin = std::move(*skin);
+
+  // The deformable component: all three chunks or none.
+  const int present = (prim_payload ? 1 : 0) + (graph_payload ? 1 : 0) + (calib_payload ? 1 : 0);
+  if (present == 0) return avatar;
+  if (present != 3) {
+    return fail("{}: the implicit model needs chunks PRIM, GRPH and CALB; missing:{}{}{}", source,
+                prim_payload ? "" : " PRIM", graph_payload ? "" : " GRPH",
+                calib_payload ? "" : " CALB");
+  }
+  auto prim = decodePrimitiveSet(*prim_payload, avatar.skeleton.jointCount());
+  if (!prim) return fail("{}: chunk 'PRIM': {}", source, prim.error().message);
+  auto graph = decodeCombinationGraph(*graph_payload, *prim);
+  if (!graph) return fail("{}: chunk 'GRPH': {}", source, graph.error().message);
+  auto calib = decodeCalibration(*calib_payload, *prim, avatar.skin.vertexCount());
+  if (!calib) return fail("{}: chunk 'CALB': {}", source, calib.error().message);
+  avatar.implicit = ImplicitModel{std::move(*prim), std::move(*graph), std::move(*calib)};
+  if (Status v = validateAvatar(avatar); !v) return withContext(source, v.error());
   return avatar;
 }
 

@@ -7,6 +7,13 @@ Status validateAvatar(const AvatarModel& avatar) {
   if (Status s = validateSkinMesh(avatar.skin, avatar.skeleton.jointCount()); !s) {
     return withContext("skin", s.error());
   }
+  if (avatar.implicit) {
+    if (Status s = validateImplicitModel(*avatar.implicit, avatar.skeleton.jointCount(),
+                                         avatar.skin.vertexCount());
+        !s) {
+      return withContext("implicit model", s.error());
+    }
+  }
   return {};
 }
 

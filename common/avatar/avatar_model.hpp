@@ -2,11 +2,13 @@
 // shared read-only at run time.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "common/anim/skeleton.hpp"
 #include "common/anim/skin_mesh.hpp"
 #include "common/base/result.hpp"
+#include "common/deform/implicit_model.hpp"
 
 namespace vistel {
 
@@ -14,11 +16,13 @@ struct AvatarModel {
   std::string name;   // display name, e.g. the file stem
   Skeleton skeleton;  // model space, metres, +Y up
   SkinMesh skin;      // prototype skin in the bind (= rest) posture
-  // The deformable component (PrimitiveSet, CombinationGraph, Calibration) joins here
-  // with the deformable-component issue.
+  // The deformable component (primitives, combination graph, calibration), fitted by
+  // `vistel-avatar build`; empty = the avatar is drawn with the rigid component only.
+  std::optional<ImplicitModel> implicit;
 };
 
-// Validates skeleton and skin together (the message names the part and the element).
+// Validates skeleton, skin and implicit model together (the message names the part and
+// the element).
 Status validateAvatar(const AvatarModel& avatar);
 
 }  // namespace vistel
