@@ -1,39 +1,12 @@
 // Replaying gives the same deformed vertices with 1 and 2 threads (STYLE.md
 // "Reproducible"), and the per-frame loop allocates nothing after warm-up.
-#include <atomic>
-#include <cstdlib>
-#include <new>
 
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "common/base/hash.hpp"
 #include "tests/deform/fixtures.hpp"
-
-namespace {
-std::atomic<long> g_allocations{0};
-std::atomic<bool> g_counting{false};
-}  // namespace
-
-// Counting allocator for this test binary (malloc-backed; the compiler cannot see that the
-// pairs match). Not under AddressSanitizer, which owns operator new there.
-#if defined(__SANITIZE_ADDRESS__)
-#define VISTEL_COUNTING_NEW 0
-#else
-#define VISTEL_COUNTING_NEW 1
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-void* operator new(std::size_t size) {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1);
-  void* p = std::malloc(size == 0 ? 1 : size);
-  if (p == nullptr) throw std::bad_alloc();
-  return p;
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-#endif
+#include "tests/support/alloc_counter.hpp"
 
 namespace vistel {
 namespace {
@@ -77,7 +50,6 @@ TEST(Determinism, SameHashWithOneAndTwoThreads) {
 }
 
 TEST(Allocation, NoHeapAllocationPerFrameAfterWarmUp) {
-  if (!VISTEL_COUNTING_NEW) GTEST_SKIP() << "allocation counting is off under AddressSanitizer";
   auto arm = test::armBody();
   BallSpec spec;
   spec.radius = 0.05f;
@@ -93,15 +65,13 @@ TEST(Allocation, NoHeapAllocationPerFrameAfterWarmUp) {
   scene.step(0.0);
   test::bendArm(*arm, 0.0f);
   scene.step(0.03);
-  g_allocations = 0;
-  g_counting = true;
+  const test::AllocationCounter counter;
   for (int f = 0; f < 10; ++f) {
     test::bendArm(*arm, glm::radians(14.0f * f));
     ball->placement[3] = glm::vec4(0.45f, 0.09f - 0.002f * f, 0.0f, 1.0f);
     scene.step(0.06 + f / 30.0);
   }
-  g_counting = false;
-  EXPECT_EQ(g_allocations.load(), 0);
+  EXPECT_EQ(counter.count(), 0);
   EXPECT_GT(arm->state.counters.contact_vertices, 0);
 }
 

@@ -12,8 +12,8 @@
 #include "common/motion/bvh.hpp"
 #include "common/motion/joint_map.hpp"
 #include "common/motion/retarget.hpp"
-#include "tests/motion/allocation_counter.hpp"
 #include "tests/motion/glb_skeleton.hpp"
+#include "tests/support/alloc_counter.hpp"
 #include "tests/support/test_support.hpp"
 
 namespace vistel {

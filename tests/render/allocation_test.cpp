@@ -1,48 +1,12 @@
 // No heap allocation per frame after warm-up (STYLE.md): counts operator new calls made
-// by any thread during render() once every member's buffers exist. (This file replaces
-// the global operator new/delete of the test binary with counting versions.)
-#include <atomic>
-#include <cstdlib>
-#include <new>
-
+// by any thread during render() once every member's buffers exist.
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "client/view/room_view.hpp"
 #include "render_checks.hpp"
 #include "test_avatar.hpp"
-
-namespace {
-std::atomic<long> g_allocations{0};
-}  // namespace
-
-// Every non-aligned form is replaced, so that memory from one never reaches another's
-// delete (AddressSanitizer checks that pairing).
-namespace {
-void* countedAlloc(std::size_t size) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  return std::malloc(size == 0 ? 1 : size);
-}
-}  // namespace
-
-void* operator new(std::size_t size) {
-  if (void* p = countedAlloc(size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) {
-  if (void* p = countedAlloc(size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new(std::size_t size, const std::nothrow_t&) noexcept { return countedAlloc(size); }
-void* operator new[](std::size_t size, const std::nothrow_t&) noexcept {
-  return countedAlloc(size);
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
-void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
+#include "tests/support/alloc_counter.hpp"
 
 namespace vistel {
 namespace {
@@ -71,13 +35,13 @@ TEST(RoomViewAllocation, NoHeapAllocationPerFrameAfterWarmUp) {
        {StereoMode::kOff, StereoMode::kSideBySide, StereoMode::kAnaglyph}) {
     view->setStereo(stereo);
     for (int i = 0; i < 3; ++i) view->render(members);  // warm-up (driver state, buffers)
-    const long before = g_allocations.load();
+    const test::AllocationCounter counter;
     for (int i = 0; i < 5; ++i) {
       members[1].posture.rotations[2] =
           glm::angleAxis(0.1f * static_cast<float>(i), glm::vec3(1, 0, 0));
       view->render(members);
     }
-    EXPECT_EQ(g_allocations.load() - before, 0) << "stereo mode " << static_cast<int>(stereo);
+    EXPECT_EQ(counter.count(), 0) << "stereo mode " << static_cast<int>(stereo);
   }
 }
 

@@ -15,8 +15,8 @@
 #include "common/sensors/random.hpp"
 #include "common/sensors/rig_simulator.hpp"
 #include "common/sensors/rotation_utils.hpp"
-#include "tests/sensors/alloc_counter.hpp"
 #include "tests/sensors/humanoid.hpp"
+#include "tests/support/alloc_counter.hpp"
 
 namespace vistel {
 namespace {
