@@ -27,6 +27,9 @@ constexpr float kDefaultStiffness = 3.0e4f;
 // margin of the collider's support box (a vertex outside the support has its root where
 // the collider contributes nothing unless its own root is this far away).
 constexpr float kCullMargin = 0.01f;
+// Vertex patches: at most this many vertices each, and this many patches per pass A task.
+constexpr std::uint32_t kPatchSize = 32;
+constexpr int kPatchesPerTask = 16;
 
 inline bool insideBox(const Bounds& b, const glm::vec3& p) {
   return p.x >= b.min.x && p.x <= b.max.x && p.y >= b.min.y && p.y <= b.max.y && p.z >= b.min.z &&
@@ -78,32 +81,40 @@ struct VertexProblem {
   int ncand = 0;
   bool overflow = false;  // more colliders than kMaxCandidates (the rest dropped)
   Candidate cand[kMaxCandidates];
-  // Side result of the last evaluation.
-  glm::vec3 own_gradient{0.0f};  // gradient of w_v D_v - T alone
+  // Side result of the last evaluation (see ownExcess).
+  glm::vec3 smooth_gradient{0.0f};
 };
 
-// w_v D_v(P) - T (or the free vertex's planar excess) and its gradient.
-inline float ownExcess(const VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
+// w_v D_v(P) - T (or the free vertex's planar excess) and its gradient; also the outward
+// direction of the vertex's own field without the crease (DIFF's gradient is singular where
+// the two limbs' fields are equal): vp.smooth_gradient = grad(F_p0 + max(F_p1, F_p2) +
+// F_bone) w_v (for limb and free vertices the own gradient itself).
+inline float ownExcess(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
   if (vp.cls == VertexClass::kFree) {
     grad = -vp.slope * vp.n0;
+    vp.smooth_gradient = grad;
     return -vp.slope * glm::dot(p - vp.anchor, vp.n0);
   }
-  const float d =
-      vertexDensity(vp.cls, vp.own[0], vp.own[1], vp.own[2], vp.own[3], vp.diff_exponent, p, &grad);
-  grad *= vp.w;
+  glm::vec3 g0;
+  float d = primitiveField(*vp.own[0], p, &g0);
+  glm::vec3 smooth = g0;
+  if (vp.cls == VertexClass::kJoint) {
+    glm::vec3 ga, gb, gd;
+    const float fa = primitiveField(*vp.own[1], p, &ga);
+    const float fb = primitiveField(*vp.own[2], p, &gb);
+    d += diffField(fa, ga, fb, gb, vp.diff_exponent, &gd);
+    g0 += gd;
+    smooth += fa >= fb ? ga : gb;
+  }
+  if (vp.own[3] != nullptr) {
+    glm::vec3 gbone;
+    d += primitiveField(*vp.own[3], p, &gbone);
+    g0 += gbone;
+    smooth += gbone;
+  }
+  grad = vp.w * g0;
+  vp.smooth_gradient = vp.w * smooth;
   return vp.w * d - vp.iso;
-}
-
-// Outward direction of the vertex's own field without the crease (DIFF's gradient is
-// singular where the two limbs' fields are equal): -grad(F_p0 + max(F_p1, F_p2) + F_bone).
-inline glm::vec3 smoothOwnGradient(const VertexProblem& vp, const glm::vec3& p) {
-  if (vp.cls != VertexClass::kJoint) return vp.own_gradient;
-  glm::vec3 g0, ga, gb, gbone(0.0f);
-  primitiveField(*vp.own[0], p, &g0);
-  const float fa = primitiveField(*vp.own[1], p, &ga);
-  const float fb = primitiveField(*vp.own[2], p, &gb);
-  if (vp.own[3] != nullptr) primitiveField(*vp.own[3], p, &gbone);
-  return vp.w * (g0 + (fa >= fb ? ga : gb) + gbone);
 }
 
 // The soft part of Step 2's equation, g(P) = w_v D_v(P) - T + sum_i COLL_i with the
@@ -114,7 +125,6 @@ inline glm::vec3 smoothOwnGradient(const VertexProblem& vp, const glm::vec3& p) 
 // partners (lambda = 0) are not in g: they are hard constraints x_i <= 0 applied after.
 inline float evaluate(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
   float g = ownExcess(vp, p, grad);
-  vp.own_gradient = grad;
   for (int i = 0; i < vp.ncand; ++i) {
     const Candidate& c = vp.cand[i];
     if (!inBounds(*c.prim, p)) continue;
@@ -202,12 +212,65 @@ void gatherOwn(const Frame& fr, int v, VertexProblem& vp) {
   vp.overflow = false;
 }
 
-// Pass A for vertex v: finds its collision candidates into the state's cache (colliders of
-// its own primitives from Step 1 except its own defining ones, and its always-pairs: the
-// opposite limb of a joint vertex), each only when the rigid position p0 is near the
+// Marks a collider list entry as coming from an always-pair (it applies only to the
+// vertices that have that pair).
+constexpr std::uint16_t kAlwaysEntry = 0x8000;
+// Collider list capacity of one patch (or one vertex, when a patch overflows it).
+constexpr int kMaxListed = 64;
+
+// Collects into `out` the colliders that may matter to vertices with defining primitives
+// key[0..2] and always-pair primitives `always`, whose rigid positions lie in `box`: the
+// colliders Step 1 found for the key primitives (same-body ones other than the key's own),
+// and the always-pairs' primitives, each once and only when its support (grown by the
+// cull margin) overlaps the box. Returns the count, or -1 when more than kMaxListed.
+int listColliders(const Frame& fr, const std::array<std::int16_t, 4>& key,
+                  std::span<const std::int16_t> always, const Bounds& box,
+                  std::uint16_t (&out)[kMaxListed]) {
+  const DeformState& st = *fr.st;
+  int n = 0;
+  const auto overlaps = [&box](const DeformState::Collider& col) {
+    const Bounds& c = col.cull;
+    return !(box.max.x < c.min.x || box.min.x > c.max.x || box.max.y < c.min.y ||
+             box.min.y > c.max.y || box.max.z < c.min.z || box.min.z > c.max.z);
+  };
+  const auto listed = [&](int c) {
+    for (int i = 0; i < n; ++i) {
+      if ((out[i] & ~kAlwaysEntry) == c) return true;
+    }
+    return false;
+  };
+  for (std::size_t k = 0; k < 3; ++k) {
+    const std::int16_t o = key[k];
+    if (o < 0) continue;
+    const auto ou = static_cast<std::size_t>(o);
+    for (std::uint32_t j = st.prim_collider_offsets[ou]; j < st.prim_collider_offsets[ou + 1];
+         ++j) {
+      const int c = st.prim_colliders[j];
+      const DeformState::Collider& col = st.colliders[static_cast<std::size_t>(c)];
+      if (col.body == fr.self &&
+          (col.prim == key[0] || col.prim == key[1] || col.prim == key[2] || col.prim == key[3])) {
+        continue;
+      }
+      if (!overlaps(col) || listed(c)) continue;
+      if (n == kMaxListed) return -1;
+      out[n++] = static_cast<std::uint16_t>(c);
+    }
+  }
+  for (const std::int16_t prim : always) {
+    const std::int32_t c = st.always_collider[static_cast<std::size_t>(prim)];
+    if (c < 0 || !overlaps(st.colliders[static_cast<std::size_t>(c)]) || listed(c)) continue;
+    if (n == kMaxListed) return -1;
+    out[n++] = static_cast<std::uint16_t>(c | kAlwaysEntry);
+  }
+  return n;
+}
+
+// Pass A for vertex v: picks its collision candidates from `list` (listColliders for its
+// patch) into the state's cache, each only when the rigid position p0 is near the
 // collider's support; records the rigid-pose penetration (depth, pressure) and each
 // collider's deepest penetration this frame.
-void findCandidates(const Frame& fr, int v, const glm::vec3& p0) {
+void findCandidates(const Frame& fr, int v, const glm::vec3& p0,
+                    std::span<const std::uint16_t> list) {
   const ImplicitModel& m = *fr.model;
   const Calibration& cal = m.calibration;
   DeformState& st = *fr.st;
@@ -223,24 +286,29 @@ void findCandidates(const Frame& fr, int v, const glm::vec3& p0) {
   const float k_self = ownStiffness(fr, v);
   const std::uint32_t pair_begin = cal.pair_offsets[vi];
   const std::uint32_t pair_end = cal.pair_offsets[vi + 1];
-  const auto consider = [&](int c, bool same_body_rules) {
-    for (int i = 0; i < n; ++i) {
-      if (ids[i] == c) return;
-    }
+  for (const std::uint16_t entry : list) {
+    const int c = entry & ~kAlwaysEntry;
     DeformState::Collider& col = st.colliders[static_cast<std::size_t>(c)];
-    if (!insideBox(col.cull, p0)) return;
+    const bool same = col.body == fr.self;
+    float iso = m.primitives.iso;
+    bool always = false;
+    if (same) {
+      if ((entry & kAlwaysEntry) == 0 && col.prim == pr[3]) continue;  // its own bone
+      for (std::uint32_t q = pair_begin; q < pair_end; ++q) {
+        if (cal.pairs[q].prim == col.prim) {
+          iso = cal.pairs[q].iso;
+          always = always || (cal.pairs[q].flags & kPairAlways) != 0;
+        }
+      }
+      if ((entry & kAlwaysEntry) != 0 && !always) continue;  // another vertex's pair
+    }
+    if (!insideBox(col.cull, p0)) continue;
     glm::vec3 gd;
     const float d = skeletonDistance(col.posed->shape, p0, &gd);
-    if (d > col.cull_distance) return;
-    float iso = m.primitives.iso;
-    if (same_body_rules) {
-      for (std::uint32_t q = pair_begin; q < pair_end; ++q) {
-        if (cal.pairs[q].prim == col.prim) iso = cal.pairs[q].iso;
-      }
-    }
+    if (d > col.cull_distance) continue;
     if (n == kMaxCandidates) {
       overflow = true;
-      return;
+      continue;
     }
     ids[n] = static_cast<std::uint16_t>(c);
     isos[n] = iso;
@@ -248,43 +316,19 @@ void findCandidates(const Frame& fr, int v, const glm::vec3& p0) {
     // Rigid-pose penetration into this collider.
     const PosedPrimitive& prim = *col.posed;
     const float r = d * prim.inv_r_out;
-    if (r >= 1.0f) return;
+    if (r >= 1.0f) continue;
     float fp = 0.0f;
     const float f = prim.weight * densityValue(prim.density, r, &fp);
     const float k_other = prim.stiffness;
     const float omega = std::isinf(k_other) ? 1.0f : w;
     const float x = omega * f - iso;
-    if (!(x > 0.0f)) return;
+    if (!(x > 0.0f)) continue;
     atomicMaxBits(col.pmax_bits, x);
     const float gn = omega * prim.weight * std::abs(fp) * prim.inv_r_out * glm::length(gd);
     const float depth = gn > 0.0f ? x / gn : 0.0f;
     if (depth > best_depth) {
       best_depth = depth;
       best_pressure = effectiveStiffness(k_self, k_other) * depth;
-    }
-  };
-  if (fr.opt->collisions) {
-    for (std::size_t k = 0; k < 3; ++k) {
-      const std::int16_t o = pr[k];
-      if (o < 0) continue;
-      const auto ou = static_cast<std::size_t>(o);
-      for (std::uint32_t j = st.prim_collider_offsets[ou]; j < st.prim_collider_offsets[ou + 1];
-           ++j) {
-        const int c = st.prim_colliders[j];
-        const DeformState::Collider& col = st.colliders[static_cast<std::size_t>(c)];
-        const bool same = col.body == fr.self;
-        if (same &&
-            (col.prim == pr[0] || col.prim == pr[1] || col.prim == pr[2] || col.prim == pr[3])) {
-          continue;
-        }
-        consider(c, same);
-      }
-    }
-    for (std::uint32_t q = pair_begin; q < pair_end; ++q) {
-      const VertexPair& vpair = cal.pairs[q];
-      if ((vpair.flags & kPairAlways) == 0) continue;
-      const std::int32_t c = st.always_collider[static_cast<std::size_t>(vpair.prim)];
-      if (c >= 0) consider(c, true);
     }
   }
   st.cand_count[vi] = static_cast<std::uint8_t>(n | (overflow ? 0x80 : 0));
@@ -328,35 +372,56 @@ void gatherProblem(const Frame& fr, int v, bool with_bulge, VertexProblem& vp) {
   loadCandidates(fr, v, with_bulge, vp);
 }
 
-// Whether any collider could be a candidate of vertex v this frame (a cheap pre-test).
-inline bool mayHaveCandidates(const Frame& fr, int v) {
-  const Calibration& cal = fr.model->calibration;
-  const auto vi = static_cast<std::size_t>(v);
-  const DeformState& st = *fr.st;
-  for (std::uint32_t q = cal.pair_offsets[vi]; q < cal.pair_offsets[vi + 1]; ++q) {
-    if ((cal.pairs[q].flags & kPairAlways) != 0) return true;
-  }
-  for (const std::int16_t o : cal.prims[vi]) {
-    if (o >= 0 && st.prim_collider_offsets[static_cast<std::size_t>(o)] !=
-                      st.prim_collider_offsets[static_cast<std::size_t>(o) + 1]) {
-      return true;
-    }
-  }
-  return false;
-}
-
-// Pass A over [first, last): candidates, rigid-pose penetrations, deepest penetrations.
+// Pass A over patches [first, last): each patch's box, its collider list, then its
+// vertices' candidates, rigid-pose penetrations and the colliders' deepest penetrations.
 void passPenetration(Frame& fr, int first, int last) {
   DeformState& st = *fr.st;
-  for (int v = first; v < last; ++v) {
-    const auto vi = static_cast<std::size_t>(v);
-    if (!mayHaveCandidates(fr, v)) {
-      st.cand_count[vi] = 0;
-      st.depth[vi] = 0.0f;
-      st.pressure[vi] = 0.0f;
+  const Calibration& cal = fr.model->calibration;
+  const auto pos = fr.in->rigid_positions;
+  std::uint16_t list[kMaxListed];
+  const auto clear = [&st](std::size_t vi) {
+    st.cand_count[vi] = 0;
+    st.depth[vi] = 0.0f;
+    st.pressure[vi] = 0.0f;
+  };
+  for (int q = first; q < last; ++q) {
+    const std::uint32_t b = st.patch_offsets[static_cast<std::size_t>(q)];
+    const std::uint32_t e = st.patch_offsets[static_cast<std::size_t>(q) + 1];
+    const std::span<const std::int16_t> always(
+        st.patch_always.data() + st.patch_always_offsets[static_cast<std::size_t>(q)],
+        st.patch_always_offsets[static_cast<std::size_t>(q) + 1] -
+            st.patch_always_offsets[static_cast<std::size_t>(q)]);
+    Bounds box{pos[st.order[b]], pos[st.order[b]]};
+    for (std::uint32_t i = b + 1; i < e; ++i) {
+      box.min = glm::min(box.min, pos[st.order[i]]);
+      box.max = glm::max(box.max, pos[st.order[i]]);
+    }
+    const std::array<std::int16_t, 4> key = cal.prims[st.order[b]];
+    const int n = listColliders(fr, {key[0], key[1], key[2], kNoPrimitive}, always, box, list);
+    if (n == 0) {
+      for (std::uint32_t i = b; i < e; ++i) clear(st.order[i]);
       continue;
     }
-    findCandidates(fr, v, fr.in->rigid_positions[vi]);
+    for (std::uint32_t i = b; i < e; ++i) {
+      const std::uint32_t v = st.order[i];
+      if (n > 0) {
+        findCandidates(fr, static_cast<int>(v), pos[v], {list, static_cast<std::size_t>(n)});
+        continue;
+      }
+      // The patch's list overflowed: list the vertex's own.
+      const auto& pr = cal.prims[v];
+      std::int16_t own_always[kMaxListed];
+      std::size_t na = 0;
+      for (std::uint32_t k = cal.pair_offsets[v]; k < cal.pair_offsets[v + 1] && na < kMaxListed;
+           ++k) {
+        if ((cal.pairs[k].flags & kPairAlways) != 0) own_always[na++] = cal.pairs[k].prim;
+      }
+      int nv = listColliders(fr, {pr[0], pr[1], pr[2], pr[3]}, {own_always, na},
+                             Bounds{pos[v], pos[v]}, list);
+      if (nv < 0) nv = kMaxListed;  // more near one vertex than a list holds: the first ones
+      findCandidates(fr, static_cast<int>(v), pos[v], {list, static_cast<std::size_t>(nv)});
+      if (nv == kMaxListed) st.cand_count[v] |= 0x80;
+    }
   }
 }
 
@@ -450,9 +515,13 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
   const Calibration& cal = fr.model->calibration;
   for (int v = first; v < last; ++v) {
     const auto vi = static_cast<std::size_t>(v);
-    // A rigid limb vertex with nothing near it is on its surface by construction.
-    if (cal.rigid[vi] != 0 && (st.cand_count[vi] & 0x7F) == 0 && st.offset[vi] == 0.0f &&
-        st.memory[vi] == 0.0f && opt.projection == ProjectionMode::kNormal) {
+    // A rigid limb vertex with nothing near it is on its surface by construction; so is a
+    // free vertex (its own field is a plane through its rigid position).
+    if ((cal.rigid[vi] != 0 || cal.vertex_class[vi] == VertexClass::kFree) &&
+        (st.cand_count[vi] & 0x7F) == 0 && st.memory[vi] == 0.0f &&
+        opt.projection == ProjectionMode::kNormal) {
+      st.offset[vi] = 0.0f;
+      st.free_offset[vi] = 0.0f;
       st.positions[vi] = fr.in->rigid_positions[vi];
       st.directions[vi] = fr.in->rigid_normals[vi];
       st.contact_body[vi] = -1;
@@ -462,6 +531,7 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
     }
     gatherProblem(fr, v, true, vp);
     if (vp.overflow) ++cnt.candidate_overflow;
+    if (vp.ncand > 0) ++cnt.candidate_vertices;
     std::uint8_t flags = 0;
     const float reach = searchReach(vp);
 
@@ -478,7 +548,7 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
     // own field's (crease-free) gradient; also when the normal finds no root.
     const bool at_root = std::abs(g) < opt.root.tolerance;
     glm::vec3 smooth(0.0f);
-    if (!at_root) smooth = smoothOwnGradient(vp, vp.p0 + s_start * dir);
+    if (!at_root) smooth = vp.smooth_gradient;
     const float gn = glm::length(smooth);
     const auto use_gradient = [&]() {
       flags |= kVertexGradient;
@@ -721,21 +791,90 @@ void buildColliders(Frame& fr, const InteractionList& list) {
   std::fill(st.prim_collider_offsets.begin(), st.prim_collider_offsets.end(), 0u);
   st.prim_colliders.clear();
   const auto entries = fr.opt->collisions ? list.forBody(fr.self) : std::span<const Interaction>();
-  // Entries are sorted by own primitive: count, then fill.
+  // Entries are sorted by own primitive: count and fill in one pass.
   for (const Interaction& e : entries) {
-    if (e.prim_a < nprim) ++st.prim_collider_offsets[e.prim_a + 1u];
+    if (e.prim_a >= nprim) continue;
+    ++st.prim_collider_offsets[e.prim_a + 1u];
+    st.prim_colliders.push_back(static_cast<std::uint16_t>(find_or_add(e.body_b, e.prim_b)));
   }
   for (std::size_t p = 0; p < nprim; ++p)
     st.prim_collider_offsets[p + 1] += st.prim_collider_offsets[p];
-  for (const Interaction& e : entries) {
-    if (e.prim_a >= nprim) continue;
-    st.prim_colliders.push_back(static_cast<std::uint16_t>(find_or_add(e.body_b, e.prim_b)));
-  }
   std::fill(st.always_collider.begin(), st.always_collider.end(), -1);
   if (fr.opt->collisions) {
     for (const std::int16_t p : st.always_prims) {
       st.always_collider[static_cast<std::size_t>(p)] = find_or_add(fr.self, p);
     }
+  }
+}
+
+// Groups the vertices into patches: vertices with the same defining primitives p0..p2,
+// grown breadth-first over the triangles into compact groups of at most kPatchSize (each
+// next patch seeded at the previous one's frontier), with the union of their always-pair
+// primitives. Deterministic; init time only.
+void buildPatches(const Calibration& cal, DeformState& st) {
+  const std::size_t nv = cal.prims.size();
+  const auto idx = std::span<const std::uint32_t>(st.vf_faces);  // face ids per vertex
+  std::vector<std::uint8_t> taken(nv, 0);
+  std::vector<std::uint32_t> queue, seeds;
+  st.order.clear();
+  st.order.reserve(nv);
+  st.patch_offsets.assign(1, 0);
+  st.patch_always_offsets.assign(1, 0);
+  st.patch_always.clear();
+  const auto same_key = [&cal](std::uint32_t a, std::uint32_t b) {
+    return cal.prims[a][0] == cal.prims[b][0] && cal.prims[a][1] == cal.prims[b][1] &&
+           cal.prims[a][2] == cal.prims[b][2];
+  };
+  std::size_t next_index = 0;
+  while (st.order.size() < nv) {
+    std::uint32_t seed = 0;
+    bool found = false;
+    while (!seeds.empty() && !found) {
+      seed = seeds.back();
+      seeds.pop_back();
+      found = taken[seed] == 0;
+    }
+    if (!found) {
+      while (taken[next_index] != 0) ++next_index;
+      seed = static_cast<std::uint32_t>(next_index);
+    }
+    queue.assign(1, seed);
+    taken[seed] = 1;
+    std::size_t head = 0;
+    while (head < queue.size() && head < kPatchSize) {
+      const std::uint32_t v = queue[head++];
+      st.order.push_back(v);
+      for (std::uint32_t k = st.vf_offsets[v]; k < st.vf_offsets[v + 1]; ++k) {
+        const std::uint32_t f = idx[k];
+        for (std::uint32_t j = 0; j < 3; ++j) {
+          const std::uint32_t u = st.face_vertices[3 * f + j];
+          if (taken[u] == 0 && same_key(u, seed)) {
+            taken[u] = 1;
+            queue.push_back(u);
+          }
+        }
+      }
+    }
+    // Queued but not placed: seeds of the next patches.
+    for (std::size_t i = queue.size(); i-- > head;) {
+      taken[queue[i]] = 0;
+      seeds.push_back(queue[i]);
+    }
+    // Always-pair primitives of the patch's vertices.
+    const std::size_t first_always = st.patch_always.size();
+    for (std::size_t i = st.patch_offsets.back(); i < st.order.size(); ++i) {
+      const std::uint32_t v = st.order[i];
+      for (std::uint32_t q = cal.pair_offsets[v]; q < cal.pair_offsets[v + 1]; ++q) {
+        if ((cal.pairs[q].flags & kPairAlways) == 0) continue;
+        const std::int16_t prim = cal.pairs[q].prim;
+        if (std::find(st.patch_always.begin() + static_cast<std::ptrdiff_t>(first_always),
+                      st.patch_always.end(), prim) == st.patch_always.end()) {
+          st.patch_always.push_back(prim);
+        }
+      }
+    }
+    st.patch_offsets.push_back(static_cast<std::uint32_t>(st.order.size()));
+    st.patch_always_offsets.push_back(static_cast<std::uint32_t>(st.patch_always.size()));
   }
 }
 
@@ -788,6 +927,7 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
   for (std::size_t p = 0; p < nprim; ++p) {
     if (named[p] != 0) st.always_prims.push_back(static_cast<std::int16_t>(p));
   }
+  st.face_vertices.assign(indices.begin(), indices.end());
   // Vertex -> face adjacency.
   st.vf_offsets.assign(nv + 1, 0);
   for (const std::uint32_t i : indices) ++st.vf_offsets[i + 1];
@@ -797,6 +937,7 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
   for (std::size_t i = 0; i < indices.size(); ++i) {
     st.vf_faces[fill[indices[i]]++] = static_cast<std::uint32_t>(i / 3);
   }
+  buildPatches(model.calibration, st);
   st.chunk_counters.assign(static_cast<std::size_t>((nvert + 511) / 512) + 1, DeformCounters{});
   return {};
 }
@@ -831,12 +972,13 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
   };
 
   // Pass A: rigid-pose penetrations (only vertices with candidates do any work).
-  auto pass_a = [&](int c) {
-    const auto [b, e] = range(c);
-    passPenetration(fr, b, e);
+  const int npatch = static_cast<int>(st.patch_offsets.size()) - 1;
+  const int patch_tasks = (npatch + kPatchesPerTask - 1) / kPatchesPerTask;
+  auto pass_a = [&](int t) {
+    passPenetration(fr, t * kPatchesPerTask, std::min(npatch, (t + 1) * kPatchesPerTask));
   };
   if (!st.colliders.empty()) {
-    parallelFor(pool, chunks, pass_a);
+    parallelFor(pool, patch_tasks, pass_a);
   } else {
     std::fill(st.depth.begin(), st.depth.end(), 0.0f);
     std::fill(st.pressure.begin(), st.pressure.end(), 0.0f);
@@ -893,6 +1035,7 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
     total.gradient_vertices += k.gradient_vertices;
     total.contact_vertices += k.contact_vertices;
     total.candidate_overflow += k.candidate_overflow;
+    total.candidate_vertices += k.candidate_vertices;
     total.rigid_vertices += k.rigid_vertices;
     total.max_offset = std::max(total.max_offset, k.max_offset);
   }

@@ -76,6 +76,7 @@ struct DeformCounters {
   int relaxed_vertices = 0;           // moved by tangential relaxation
   int contact_vertices = 0;           // on a contact surface
   int candidate_overflow = 0;         // vertices with more colliders than kMaxCandidates
+  int candidate_vertices = 0;         // vertices with at least one collision candidate
   int rigid_vertices = 0;             // rigid limb vertices with nothing near: no evaluation
   float max_offset = 0.0f;            // largest |P' - P| (m)
 
@@ -138,13 +139,20 @@ struct DeformState {
   std::vector<std::int16_t> always_prims;     // prims named by kPairAlways pairs
   std::vector<std::uint32_t> vf_offsets;      // vertex -> incident faces (nvert + 1)
   std::vector<std::uint32_t> vf_faces;
-  std::vector<std::uint8_t> cand_count;      // candidates per vertex (nvert; bit 7:
-                                             // more were dropped)
-  std::vector<std::uint16_t> cand_collider;  // (nvert * kMaxCandidates)
-  std::vector<float> cand_iso;               // (nvert * kMaxCandidates)
-  std::vector<std::uint8_t> dirty;           // needs a new normal (nvert)
-  std::vector<glm::vec3> relaxed;            // relaxation pass output (nvert)
-  std::vector<glm::vec3> directions;         // projection direction used (nvert)
+  std::vector<std::uint32_t> face_vertices;  // the triangles (3 * ntri)
+  // Vertex patches (pass A culls colliders per patch): vertices sharing their defining
+  // primitives, in compact groups over the mesh.
+  std::vector<std::uint32_t> order;                 // (nvert) vertices, patch by patch
+  std::vector<std::uint32_t> patch_offsets;         // (npatch + 1) into order
+  std::vector<std::uint32_t> patch_always_offsets;  // (npatch + 1) into patch_always
+  std::vector<std::int16_t> patch_always;           // always-pair primitives per patch
+  std::vector<std::uint8_t> cand_count;             // candidates per vertex (nvert; bit 7:
+                                                    // more were dropped)
+  std::vector<std::uint16_t> cand_collider;         // (nvert * kMaxCandidates)
+  std::vector<float> cand_iso;                      // (nvert * kMaxCandidates)
+  std::vector<std::uint8_t> dirty;                  // needs a new normal (nvert)
+  std::vector<glm::vec3> relaxed;                   // relaxation pass output (nvert)
+  std::vector<glm::vec3> directions;                // projection direction used (nvert)
   std::vector<DeformCounters> chunk_counters;
 };
 

@@ -8,6 +8,7 @@ PosedPrimitive posePrimitive(const Primitive& p, const glm::mat4& xform) {
   PosedPrimitive out;
   out.shape = transformShape(p.shape, xform);
   out.inv_r_out = 1.0f / p.r_out;
+  out.surface = p.r_in;
   out.weight = p.weight;
   out.density = p.density;
   out.stiffness = p.stiffness;

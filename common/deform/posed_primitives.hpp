@@ -17,6 +17,7 @@ namespace vistel {
 struct PosedPrimitive {
   Shape shape;             // world space, prepared
   float inv_r_out = 1.0f;  // 1 / r_out (skeleton-distance units)
+  float surface = 0.5f;    // r_in: the skeleton distance of its own surface F_i = T
   float weight = 1.0f;     // W
   Density density;
   float stiffness = 3.0e4f;  // Pa per metre; infinity = rigid

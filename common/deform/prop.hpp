@@ -1,11 +1,33 @@
 // Props: bodies with their own primitives and (optionally) a skin, e.g. a ball
-// (DESIGN.md §6). A ball is one sphere primitive on a one-joint skeleton whose only
-// transform is the ball's placement; soft or rigid, with an elasticity over time.
+// (DESIGN.md §3 "Props", §6). A ball is one sphere primitive on a one-joint skeleton whose
+// only transform is the ball's placement; soft or rigid, with an elasticity over time.
+//
+// Ball dynamics (stepBall) use primitives only, no meshes, so a server that has just
+// skeletons, primitive sets and postures can step props: each posed primitive's surface is
+// its iso-surface F_i = T, the offset surface at skeleton distance r_in, so a ball of
+// radius R penetrates primitive i by depth = r_in + R - dist(centre, skeleton) (cone-
+// spheres: in their local profile scale), and the body pushes back along the field's
+// gradient direction with pressure k * depth over the contact disc's area (as Step 3
+// measures forces on meshes): F = k * depth * 2 pi R* depth, R* = R r_s / (R + r_s) with
+// r_s the primitive's local surface radius, k the two materials' stiffnesses in series;
+// past (1 - core_fraction) r_s the ball reaches the primitive's rigid core (a bone) and
+// max_stiffness adds to k for the depth beyond it, so fast balls do not pass through.
+// Restitution e: the force is scaled by e^2 while the ball separates from the surface
+// (relative normal velocity outward), so a bounce returns e^2 of the energy stored, i.e.
+// leaves at e times the impact speed.
 #pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+
+#include <glm/glm.hpp>
 
 #include "common/anim/skeleton.hpp"
 #include "common/anim/skin_mesh.hpp"
+#include "common/base/result.hpp"
 #include "common/deform/implicit_model.hpp"
+#include "common/deform/interactions.hpp"
 
 namespace vistel {
 
@@ -30,5 +52,86 @@ Result<BallBody> makeBall(const BallSpec& spec);
 // Only the primitive part (for a server, which needs no mesh): a PrimitiveSet with the
 // sphere and an empty CombinationGraph.
 Result<PrimitiveSet> makeBallPrimitives(const BallSpec& spec);
+
+// --- Ball dynamics from primitives ------------------------------------------------------
+
+// The state a server keeps (and sends in snapshots) per ball. World space: metres, +Y up,
+// seconds, kilograms.
+struct BallState {
+  glm::vec3 position{0.0f};           // centre
+  glm::vec3 velocity{0.0f};           // m/s
+  float radius = 0.1f;                // m (> 0)
+  float mass = 0.4f;                  // kg (> 0)
+  float restitution = 0.7f;           // e in [0, 1]: rebound speed / impact speed
+  float stiffness = kRigidStiffness;  // the ball's own, Pa per metre of depth (> 0);
+                                      // kRigidStiffness = rigid (the partner yields)
+};
+
+// Checks finite fields and the ranges above. The message names the field.
+Status validateBallState(const BallState& ball);
+
+// The ball's placement (a translation) for posing its PrimitiveSet (makeBallPrimitives with
+// the same radius) as a body of Step 1: posePrimitives(set, {&placement, 1}, posed).
+glm::mat4 ballPlacement(const BallState& ball);
+
+struct BallStepOptions {
+  // m/s^2
+  glm::vec3 gravity{0.0f, -9.81f, 0.0f};
+  // A rigid floor plane at y = floor_height (m), of floor_stiffness (Pa/m).
+  bool floor = true;
+  float floor_height = 0.0f;
+  float floor_stiffness = kRigidStiffness;
+  // Cap on the series stiffness (rigid on rigid), Pa/m; also the stiffness of a
+  // primitive's rigid core: its inner core_fraction of the surface radius (a bone).
+  float max_stiffness = 1.0e7f;
+  float core_fraction = 0.5f;
+  // Substeps move the ball at most max_travel (m), last at most stability / omega of the
+  // current contact (omega^2 = contact stiffness slope / mass), and number at most
+  // max_substeps per call (beyond, the last substep takes the rest: report.saturated).
+  float max_travel = 0.01f;
+  float stability = 0.2f;
+  int max_substeps = 256;
+  // A body index to ignore (the ball's own body, if it is listed among the bodies).
+  int skip_body = -1;
+  // Optional: the same bodies posed previous_interval seconds earlier (same sizes), for
+  // the velocity of the touching surface (a hand hitting the ball). Empty: bodies still.
+  std::span<const BodyView> previous{};
+  float previous_interval = 0.0f;
+};
+
+// One (body, primitive) the ball touched during a step; the body feels -force.
+struct BallContact {
+  int body = -1;           // index into `bodies`; kFloorBody for the floor
+  int prim = -1;           // primitive index in that body (-1 for the floor)
+  glm::vec3 force{0.0f};   // N on the ball, mean over the step (impulse / dt)
+  glm::vec3 normal{0.0f};  // unit, from the surface towards the ball (last substep)
+  glm::vec3 point{0.0f};   // contact point on the ball's surface (last substep), world
+  float max_depth = 0.0f;  // deepest penetration during the step (m)
+  float area = 0.0f;       // contact disc area at the last substep in contact (m^2)
+};
+
+inline constexpr int kMaxBallContacts = 16;
+inline constexpr int kFloorBody = -2;
+
+struct BallStepReport {
+  bool valid = false;  // false: the state or dt was invalid, nothing moved
+  int substeps = 0;
+  bool saturated = false;  // max_substeps reached (the last substep was longer)
+  int contact_count = 0;   // entries of contacts, sorted by (body, prim), floor first
+  std::array<BallContact, kMaxBallContacts> contacts{};
+  int dropped_contacts = 0;     // distinct contacts beyond kMaxBallContacts (their force is
+                                // still applied and in total_force)
+  glm::vec3 total_force{0.0f};  // N on the ball from all contacts, mean over the step
+};
+
+// Advances `ball` by dt seconds (0 < dt <= 1) under gravity, the floor and the contact
+// reaction of every posed primitive of `bodies` that takes part in collisions (bodies with
+// a null posed set, and skip_body, are ignored). Semi-implicit Euler over adaptive
+// substeps (at most max_travel of motion each, and short against the contact's own
+// period), so results depend only on the inputs: deterministic, no allocation, cost
+// O(substeps * primitives near the ball). The body's posture is taken as constant over dt
+// (its surface velocity from options.previous when given).
+BallStepReport stepBall(BallState& ball, std::span<const BodyView> bodies, float dt,
+                        const BallStepOptions& options = {});
 
 }  // namespace vistel

@@ -47,12 +47,28 @@ float segmentPolygonDistance(const glm::vec3& p0, const glm::vec3& p1, const Sha
 
 }  // namespace
 
+float polygonDistance(const Shape& s, const glm::vec3& p, glm::vec3* gradient) {
+  const glm::vec3 r = p - s.a;
+  const glm::vec2 c = closestInPolygon(s, glm::vec2(glm::dot(r, s.u), glm::dot(r, s.v)));
+  const glm::vec3 d = r - c.x * s.u - c.y * s.v;
+  const float len = std::sqrt(glm::dot(d, d));
+  if (gradient != nullptr) *gradient = len > 0.0f ? d * (1.0f / len) : glm::vec3(0.0f);
+  return len;
+}
+
 void prepareShape(Shape& s) {
   const glm::vec3 d = s.b - s.a;
   s.length = glm::length(d);
   s.axis = s.length > 0.0f ? d / s.length : glm::vec3(0.0f);
   s.cone_slope = s.length > 0.0f ? (s.radius_b - s.radius_a) / s.length : 0.0f;
   s.normal = glm::cross(s.u, s.v);
+  // (x0, y0), (x1, y0), (x1, y1), (x0, y1) counter-clockwise: an axis-aligned rectangle.
+  const auto& q = s.polygon;
+  s.rectangle = s.kind == ShapeKind::kOffsetPolygon && s.polygon_count == 4 && q[0].x < q[1].x &&
+                q[0].y == q[1].y && q[1].x == q[2].x && q[1].y < q[2].y && q[2].y == q[3].y &&
+                q[3].x == q[0].x;
+  s.rect_min = s.rectangle ? q[0] : glm::vec2(0.0f);
+  s.rect_max = s.rectangle ? q[2] : glm::vec2(0.0f);
 }
 
 Shape transformShape(const Shape& shape, const glm::mat4& xform) {

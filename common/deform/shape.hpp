@@ -47,6 +47,9 @@ struct Shape {
   float length = 0.0f;                 // |b - a|
   float cone_slope = 0.0f;             // cone-sphere: dr/dz = (radius_b - radius_a) / length
   glm::vec3 normal{0.0f, 0.0f, 1.0f};  // polygon: u x v
+  bool rectangle = false;              // polygon: an axis-aligned rectangle in (u, v)
+  glm::vec2 rect_min{0.0f};            // rectangle: its corners in (u, v)
+  glm::vec2 rect_max{0.0f};
 };
 
 // Fills the derived fields. Cheap; call after building or transforming a shape.
@@ -107,49 +110,72 @@ inline glm::vec2 closestInPolygon(const Shape& s, const glm::vec2& q) {
   return closest;
 }
 
-inline float skeletonDistance(const Shape& s, const glm::vec3& p, glm::vec3* gradient) {
-  glm::vec3 closest;
-  float scale = 1.0f;  // distance = |p - closest| / scale
-  switch (s.kind) {
-    case ShapeKind::kSphere:
-      closest = s.a;
-      break;
-    case ShapeKind::kSphylinder: {
-      const float t = std::clamp(glm::dot(p - s.a, s.axis), 0.0f, s.length);
-      closest = s.a + t * s.axis;
-      break;
-    }
-    case ShapeKind::kConeSphere: {
-      // Axial coordinate x and squared radial distance y2 of p; the stationary point of
-      // |p - c(z)| / r(z) is z* = x + k y2 / r(x) with k = dr/dz (when r(x) > 0).
-      const glm::vec3 ap = p - s.a;
-      const float x = glm::dot(ap, s.axis);
-      const float y2 = std::max(glm::dot(ap, ap) - x * x, 0.0f);
-      const float k = s.cone_slope;
-      const float rx = s.radius_a + k * x;
-      float z;
-      if (rx > 0.0f) {
-        z = std::clamp(x + k * y2 / rx, 0.0f, s.length);
-      } else {
-        z = k > 0.0f ? s.length : 0.0f;  // beyond the apex: the larger end is nearest
-      }
-      closest = s.a + z * s.axis;
-      scale = s.radius_a + k * z;
-      break;
-    }
-    case ShapeKind::kOffsetPolygon: {
-      const glm::vec3 r = p - s.a;
-      const glm::vec2 c = closestInPolygon(s, glm::vec2(glm::dot(r, s.u), glm::dot(r, s.v)));
-      closest = s.a + c.x * s.u + c.y * s.v;
-      break;
-    }
-  }
-  // Distance and its gradient (the minimiser's own motion does not contribute).
-  const glm::vec3 d = p - closest;
+// Per-kind kernels of skeletonDistance (same contract). The polygon's is out of line.
+inline float sphereDistance(const Shape& s, const glm::vec3& p, glm::vec3* gradient) {
+  const glm::vec3 d = p - s.a;
   const float len = std::sqrt(glm::dot(d, d));
-  const float inv_scale = s.kind == ShapeKind::kConeSphere ? 1.0f / scale : 1.0f;
+  if (gradient != nullptr) *gradient = len > 0.0f ? d * (1.0f / len) : glm::vec3(0.0f);
+  return len;
+}
+
+inline float segmentDistance(const Shape& s, const glm::vec3& p, glm::vec3* gradient) {
+  const glm::vec3 ap = p - s.a;
+  const float t = std::clamp(glm::dot(ap, s.axis), 0.0f, s.length);
+  const glm::vec3 d = ap - t * s.axis;
+  const float len = std::sqrt(glm::dot(d, d));
+  if (gradient != nullptr) *gradient = len > 0.0f ? d * (1.0f / len) : glm::vec3(0.0f);
+  return len;
+}
+
+inline float coneDistance(const Shape& s, const glm::vec3& p, glm::vec3* gradient) {
+  // Axial coordinate x and squared radial distance y2 of p; the stationary point of
+  // |p - c(z)| / r(z) is z* = x + k y2 / r(x) with k = dr/dz (when r(x) > 0).
+  const glm::vec3 ap = p - s.a;
+  const float x = glm::dot(ap, s.axis);
+  const float y2 = std::max(glm::dot(ap, ap) - x * x, 0.0f);
+  const float k = s.cone_slope;
+  const float rx = s.radius_a + k * x;
+  float z;
+  if (rx > 0.0f) {
+    z = std::clamp(x + k * y2 / rx, 0.0f, s.length);
+  } else {
+    z = k > 0.0f ? s.length : 0.0f;  // beyond the apex: the larger end is nearest
+  }
+  const glm::vec3 d = ap - z * s.axis;
+  const float inv_scale = 1.0f / (s.radius_a + k * z);
+  const float len = std::sqrt(glm::dot(d, d));
+  // Distance and its gradient (the minimiser's own motion does not contribute).
   if (gradient != nullptr) *gradient = len > 0.0f ? d * (inv_scale / len) : glm::vec3(0.0f);
   return len * inv_scale;
+}
+
+float polygonDistance(const Shape& s, const glm::vec3& p, glm::vec3* gradient);
+
+inline float rectangleDistance(const Shape& s, const glm::vec3& p, glm::vec3* gradient) {
+  const glm::vec3 r = p - s.a;
+  const float x = glm::dot(r, s.u);
+  const float y = glm::dot(r, s.v);
+  const float cx = std::clamp(x, s.rect_min.x, s.rect_max.x);
+  const float cy = std::clamp(y, s.rect_min.y, s.rect_max.y);
+  const glm::vec3 d = r - cx * s.u - cy * s.v;
+  const float len = std::sqrt(glm::dot(d, d));
+  if (gradient != nullptr) *gradient = len > 0.0f ? d * (1.0f / len) : glm::vec3(0.0f);
+  return len;
+}
+
+inline float skeletonDistance(const Shape& s, const glm::vec3& p, glm::vec3* gradient) {
+  switch (s.kind) {
+    case ShapeKind::kSphere:
+      return sphereDistance(s, p, gradient);
+    case ShapeKind::kSphylinder:
+      return segmentDistance(s, p, gradient);
+    case ShapeKind::kConeSphere:
+      return coneDistance(s, p, gradient);
+    case ShapeKind::kOffsetPolygon:
+      if (s.rectangle) return rectangleDistance(s, p, gradient);
+      break;
+  }
+  return polygonDistance(s, p, gradient);
 }
 
 }  // namespace vistel

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 
 #include <fmt/format.h>
@@ -9,6 +10,9 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "common/deform/posed_primitives.hpp"
+#include "offline/gltf/gltf_import.hpp"
+#include "offline/synth/default_avatar.hpp"
+#include "tests/support/test_support.hpp"
 
 namespace vistel::test {
 
@@ -150,6 +154,56 @@ std::unique_ptr<Body> ballBody(const BallSpec& spec, const glm::vec3& centre) {
   b->mesh = ball->mesh;
   b->model = std::move(ball->model);
   b->placement = glm::translate(glm::mat4(1.0f), centre);
+  b->init();
+  return b;
+}
+
+const RealAvatar* realAvatar(const std::string& which) {
+  static std::map<std::string, std::unique_ptr<RealAvatar>> cache;
+  auto& slot = cache[which];
+  if (slot) return slot.get();
+  auto a = std::make_unique<RealAvatar>();
+  Result<AvatarModel> avatar =
+      which == "makehuman" ? importGltfAvatar(sharedDataPath("avatars/makehuman_game_engine.glb"))
+                           : makeDefaultAvatar();
+  if (!avatar) {
+    ADD_FAILURE() << which << ": " << avatar.error().message;
+    return nullptr;
+  }
+  a->avatar = std::move(*avatar);
+  Result<std::vector<JointMap>> maps = loadJointMaps();
+  if (!maps) {
+    ADD_FAILURE() << maps.error().message;
+    return nullptr;
+  }
+  a->maps = std::move(*maps);
+  Result<const JointMap*> map = selectJointMap(a->maps, a->avatar.skeleton);
+  if (!map) {
+    ADD_FAILURE() << map.error().message;
+    return nullptr;
+  }
+  a->map = *map;
+  Result<PrimitiveMapSpec> spec = loadPrimitiveMap();
+  if (!spec) {
+    ADD_FAILURE() << spec.error().message;
+    return nullptr;
+  }
+  Result<ImplicitModel> model = buildImplicitModel(a->avatar, *spec, a->map, {}, &a->report);
+  if (!model) {
+    ADD_FAILURE() << which << ": " << model.error().message;
+    return nullptr;
+  }
+  a->model = std::move(*model);
+  slot = std::move(a);
+  return slot.get();
+}
+
+std::unique_ptr<Body> realBody(const RealAvatar& a) {
+  auto b = std::make_unique<Body>();
+  b->name = a.avatar.name;
+  b->skeleton = a.avatar.skeleton;
+  b->mesh = a.avatar.skin;
+  b->model = a.model;
   b->init();
   return b;
 }

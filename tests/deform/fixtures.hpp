@@ -14,6 +14,7 @@
 #include "common/deform/deform.hpp"
 #include "common/deform/interactions.hpp"
 #include "common/deform/prop.hpp"
+#include "common/motion/joint_map.hpp"
 #include "offline/build/build_model.hpp"
 
 namespace vistel::test {
@@ -64,6 +65,22 @@ struct Scene {
 
   void step(double time);
 };
+
+// A real avatar with its implicit model built from the default humanoid map: "default"
+// (offline/synth makeDefaultAvatar) or "makehuman" (the shared glb). Built once per process
+// and kept (a static cache); null, with a test failure, when it cannot be made (check that
+// the shared file exists before asking for "makehuman").
+struct RealAvatar {
+  AvatarModel avatar;
+  std::vector<JointMap> maps;
+  const JointMap* map = nullptr;
+  ImplicitModel model;
+  BuildReport report;
+};
+const RealAvatar* realAvatar(const std::string& which);
+
+// A scene body of a real avatar (a copy of its cached model), in the rest posture.
+std::unique_ptr<Body> realBody(const RealAvatar& avatar);
 
 // Elbow flexion of the arm (radians, about +Z: the forearm turns towards +Y).
 void bendArm(Body& arm, float angle);

@@ -20,65 +20,18 @@
 namespace vistel {
 namespace {
 
-struct Avatar {
-  AvatarModel avatar;
-  const JointMap* map = nullptr;
-  std::vector<JointMap> maps;
-  BuildReport report;
-};
+using Avatar = test::RealAvatar;
 
-// Built once per binary run (importing and building take a fraction of a second).
-const Avatar* loadAvatar(const std::string& which) {
-  static std::map<std::string, std::unique_ptr<Avatar>> cache;
-  auto& slot = cache[which];
-  if (slot) return slot.get();
-  auto a = std::make_unique<Avatar>();
-  Result<AvatarModel> avatar =
-      which == "makehuman"
-          ? importGltfAvatar(test::sharedDataPath("avatars/makehuman_game_engine.glb"))
-          : makeDefaultAvatar();
-  if (!avatar) {
-    ADD_FAILURE() << avatar.error().message;
-    return nullptr;
-  }
-  a->avatar = std::move(*avatar);
-  Result<std::vector<JointMap>> maps = loadJointMaps();
-  if (!maps) {
-    ADD_FAILURE() << maps.error().message;
-    return nullptr;
-  }
-  a->maps = std::move(*maps);
-  Result<const JointMap*> map = selectJointMap(a->maps, a->avatar.skeleton);
-  if (!map) {
-    ADD_FAILURE() << map.error().message;
-    return nullptr;
-  }
-  a->map = *map;
-  slot = std::move(a);
-  return slot.get();
-}
-
-std::unique_ptr<test::Body> bodyOf(const Avatar& a, BuildReport* report = nullptr) {
-  Result<PrimitiveMapSpec> spec = loadPrimitiveMap();
-  EXPECT_TRUE(spec.ok()) << (spec.ok() ? "" : spec.error().message);
-  Result<ImplicitModel> model = buildImplicitModel(a.avatar, *spec, a.map, {}, report);
-  EXPECT_TRUE(model.ok()) << (model.ok() ? "" : model.error().message);
-  auto b = std::make_unique<test::Body>();
-  b->skeleton = a.avatar.skeleton;
-  b->mesh = a.avatar.skin;
-  b->model = std::move(*model);
-  b->init();
-  return b;
-}
+std::unique_ptr<test::Body> bodyOf(const Avatar& a) { return test::realBody(a); }
 
 #define VISTEL_MAKEHUMAN(var)                                             \
   VISTEL_REQUIRE_SHARED(var##_path, "avatars/makehuman_game_engine.glb"); \
-  const Avatar* var = loadAvatar("makehuman");                            \
+  const Avatar* var = test::realAvatar("makehuman");                      \
   ASSERT_NE(var, nullptr)
 
 void restChecks(const Avatar& a) {
-  BuildReport report;
-  auto b = bodyOf(a, &report);
+  const BuildReport& report = a.report;
+  auto b = bodyOf(a);
   EXPECT_EQ(report.primitives.size(), 30u) << "the default map's 30 primitives";
   for (const std::string& w : report.warnings) ADD_FAILURE() << w;
   // Calibration: every limb and joint vertex on its surface at rest.
@@ -104,7 +57,7 @@ void restChecks(const Avatar& a) {
 }
 
 TEST(RealAvatars, DefaultAvatarRestsExactly) {
-  const Avatar* a = loadAvatar("default");
+  const Avatar* a = test::realAvatar("default");
   ASSERT_NE(a, nullptr);
   restChecks(*a);
 }
