@@ -17,6 +17,8 @@ int main(int argc, char** argv) {
   vistel::registerDefaultCommand(app);
   vistel::registerGesturesCommand(app);
   vistel::registerSolveCommand(app);
+  vistel::registerBuildCommand(app);
+  vistel::registerDeformCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

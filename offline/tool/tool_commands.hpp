@@ -4,6 +4,7 @@
 
 #include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -17,10 +18,24 @@ namespace vistel {
 void registerInfoCommand(CLI::App& app);
 // vistel-avatar pose FILE (--bvh CLIP --frame K | --rest) [--skinning lbs|dqs] --out OUT.glb
 void registerPoseCommand(CLI::App& app);
-// vistel-avatar default --out OUT.glb|OUT.vavatar
+// vistel-avatar default --out OUT.glb|OUT.vavatar [--primitives MAP] [--config DIR]
 void registerDefaultCommand(CLI::App& app);
 void registerGesturesCommand(CLI::App& app);
 void registerSolveCommand(CLI::App& app);
+// vistel-avatar build IN -o OUT.vavatar [--primitives MAP] [--config DIR]
+void registerBuildCommand(CLI::App& app);
+// vistel-avatar deform AVATAR (--bvh CLIP [--frames A:B] | --rest) [--ball X,Y,Z,R[,VX,VY,VZ]]
+//   [--rigid-only] --out OUT.glb [--forces-csv F]
+void registerDeformCommand(CLI::App& app);
+
+// Fits `avatar`'s implicit model (build_command.cpp; shared with deform): the joint map that
+// fits its skeleton from <config>/skeletons, the primitive map from `primitives`. progress
+// (may be empty) gets the fraction done and the stage. The avatar is validated after.
+struct BuildReport;
+Status buildAvatarImplicit(AvatarModel& avatar, const std::string& primitives,
+                           const std::string& config,
+                           std::function<void(float, std::string_view)> progress,
+                           BuildReport* report = nullptr);
 
 // Runs `body` as the subcommand's action: an Error (or an escaped exception) is printed
 // to stderr as "vistel-avatar <command>: error: <message>" and makes the program exit with

@@ -152,6 +152,9 @@ TEST(VistelAvatarCli, DefaultAvatar) {
   Result<AvatarModel> loaded = loadAvatar(dir + "/default.vavatar");
   ASSERT_TRUE(loaded.ok()) << loaded.error().message;
   EXPECT_EQ(loaded->skin.vertexCount(), avatar->skin.vertexCount());
+  // The .vavatar carries the fitted implicit model (clients deform it).
+  ASSERT_TRUE(loaded->implicit.has_value());
+  EXPECT_GE(loaded->implicit->primitives.items.size(), 20u);
 
   VISTEL_VALIDATE_OR_SKIP(verdict, dir + "/default.glb");
   EXPECT_EQ(verdict["errors"], 0) << verdict.dump();
