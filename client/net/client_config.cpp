@@ -50,6 +50,16 @@ class TableReader {
     return {};
   }
 
+  Status boolean(std::string_view key, bool& out) {
+    known_.insert(std::string(key));
+    const toml::node* n = table_ != nullptr ? table_->get(key) : nullptr;
+    if (n == nullptr) return {};
+    auto b = n->value_exact<bool>();
+    if (!b) return fail("{}: [{}] {}: expected true or false", source_, section_, key);
+    out = *b;
+    return {};
+  }
+
   Status checkUnknown() const {
     if (table_ == nullptr) return {};
     for (const auto& [key, node] : *table_) {
@@ -86,7 +96,7 @@ Result<ClientConfig> parseClientConfig(std::string_view toml_text, std::string_v
   }
   for (const auto& [key, node] : root) {
     static const std::set<std::string, std::less<>> kSections = {"network", "playback", "source",
-                                                                 "avatars", "view"};
+                                                                 "avatars", "view",     "deform"};
     if (!kSections.count(key.str()) || !node.is_table()) {
       return fail("{}: unknown section or key '{}'", source_name, key.str());
     }
@@ -121,6 +131,10 @@ Result<ClientConfig> parseClientConfig(std::string_view toml_text, std::string_v
   VISTEL_CONFIG_TRY(view.number("worker_threads", c.worker_threads, 1, 64));
   VISTEL_CONFIG_TRY(view.number("frame_rate_hz", c.frame_rate_hz, 1, 1000));
   VISTEL_CONFIG_TRY(view.checkUnknown());
+  TableReader deform(root, "deform", source_name);
+  VISTEL_CONFIG_TRY(deform.boolean("enabled", c.deform));
+  VISTEL_CONFIG_TRY(deform.boolean("server_interactions", c.server_interactions));
+  VISTEL_CONFIG_TRY(deform.checkUnknown());
   return c;
 }
 

@@ -25,6 +25,9 @@ struct ClientConfig {
   int height = 720;
   int worker_threads = 2;
   double frame_rate_hz = 60.0;  // render (or headless sampling) rate
+  // [deform]
+  bool deform = true;               // run the deformable component on the drawn bodies
+  bool server_interactions = true;  // use the server's Step 1 lists (else compute locally)
 };
 
 Result<ClientConfig> parseClientConfig(std::string_view toml_text, std::string_view source_name);

@@ -1,6 +1,7 @@
 #include "client/net/client_session.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -11,6 +12,29 @@ namespace vistel::net {
 namespace {
 
 constexpr std::size_t kPendingPings = 16;
+
+// True when tick a is after tick b (serial arithmetic on u32).
+bool tickAfter(std::uint32_t a, std::uint32_t b) { return static_cast<std::int32_t>(a - b) > 0; }
+
+// The ball a PropInfo describes, or nullopt when a field is out of range.
+std::optional<BallSpec> ballOf(const control::PropInfo& info) {
+  const auto in = [](float v, float lo, float hi) {
+    return std::isfinite(v) && v >= lo && v <= hi;
+  };
+  if (info.kind() != control::PropInfo::BALL || !in(info.radius(), 0.01f, 2.0f) ||
+      !in(info.reach(), 1.05f, 4.0f) || !in(info.stiffness(), 0.0f, 1e12f) ||
+      !in(info.time_constant(), 1e-4f, 1e4f) || !in(info.mass(), 1e-6f, 1e6f) ||
+      !in(info.restitution(), 0.0f, 1.0f) || info.elasticity() < 0 || info.elasticity() > 2) {
+    return std::nullopt;
+  }
+  BallSpec b;
+  b.radius = info.radius();
+  b.reach = info.reach();
+  b.stiffness = info.stiffness() > 0.0f ? info.stiffness() : kRigidStiffness;
+  b.elasticity = static_cast<Elasticity>(info.elasticity());
+  b.time_constant = info.time_constant();
+  return b;
+}
 
 }  // namespace
 
@@ -60,6 +84,14 @@ void ClientSession::start(double now) {
   join.set_avatar_hash(settings_.avatar_hash);
   join.set_avatar_size(settings_.avatar_bytes ? settings_.avatar_bytes->size() : 0);
   sendControl(msg.SerializeAsString());
+}
+
+bool ClientSession::requestBall() {
+  if (state_ != SessionState::kHandshaking && state_ != SessionState::kLive) return false;
+  control::ClientMessage msg;
+  msg.mutable_spawn_prop()->set_kind(control::SpawnProp::BALL);
+  sendControl(msg.SerializeAsString());
+  return true;
 }
 
 void ClientSession::leave(const std::string& reason) {
@@ -194,8 +226,36 @@ void ClientSession::handleRoster(const control::Roster& roster) {
     if (old) spdlog::info("member '{}' ({:#x}) left the room", old->name, old->id);
   }
   members_ = std::move(next);
+  handleProps(roster);
   ++roster_version_;
   requestMissingAvatars();
+}
+
+void ClientSession::handleProps(const control::Roster& roster) {
+  // The new list in the server's order, keeping the tracks of props that stay.
+  std::vector<std::unique_ptr<RemoteProp>> next;
+  for (const control::PropInfo& info : roster.props()) {
+    const auto ball = ballOf(info);
+    if (!ball) {
+      spdlog::warn("prop {:#x}: invalid description from the server: ignored", info.prop_id());
+      continue;
+    }
+    std::unique_ptr<RemoteProp> p;
+    for (auto& old : props_) {
+      if (old && old->id == info.prop_id()) p = std::move(old);
+    }
+    if (!p) {
+      p = std::make_unique<RemoteProp>();
+      p->track = PropTrack(settings_.prop_track_capacity);
+    }
+    p->id = info.prop_id();
+    p->ball = *ball;
+    p->mass = info.mass();
+    p->restitution = info.restitution();
+    p->spawned_by = info.spawned_by();
+    next.push_back(std::move(p));
+  }
+  props_ = std::move(next);
 }
 
 void ClientSession::requestMissingAvatars() {
@@ -308,20 +368,30 @@ void ClientSession::onDatagram(std::span<const std::uint8_t> datagram, double no
 }
 
 void ClientSession::handleSnapshot(std::span<const std::uint8_t> datagram, double now) {
-  if (!wire::readSnapshot(datagram, snapshot_header_, snapshot_entries_)) {
+  if (!wire::readSnapshot(datagram, snapshot_)) {
     ++stats_.datagrams_rejected;
     return;
   }
+  const wire::SnapshotHeader& header = snapshot_.header;
   last_server_datagram_ = now;
   ++stats_.snapshots_received;
-  for (const wire::SnapshotEntry& e : snapshot_entries_) {
+  // Prop states of roster props.
+  for (const wire::PropStateRecord& state : snapshot_.props) {
+    for (auto& p : props_) {
+      if (p->id != state.prop_id) continue;
+      p->track.push(header.tick, PropSample{header.server_time, wire::propPosition(state),
+                                            wire::propVelocity(state)});
+    }
+  }
+  if (header.part_count > 0) handleInteractionPart(snapshot_);
+  for (const wire::SnapshotEntry& e : snapshot_.entries) {
     // Only roster members, with the joint count their avatar has.
     RemoteMember* m = nullptr;
     for (auto& candidate : members_) {
       if (candidate->id == e.member_id) m = candidate.get();
     }
     if (m == nullptr || m->is_self || e.record.joint_count != m->joint_count) continue;
-    wire::decodePostureRecord(e.record, snapshot_header_.server_time, scratch_posture_);
+    wire::decodePostureRecord(e.record, header.server_time, scratch_posture_);
     if (m->buffer.push(e.record.sequence, scratch_posture_) != JitterBuffer::Push::kAccepted) {
       continue;
     }
@@ -333,6 +403,50 @@ void ClientSession::handleSnapshot(std::span<const std::uint8_t> datagram, doubl
     if (clock_.synced()) {
       stats_.latency.add((clock_.serverTime(now) - scratch_posture_.time) * 1e3);
     }
+  }
+}
+
+void ClientSession::handleInteractionPart(const wire::Snapshot& snapshot) {
+  const wire::SnapshotHeader& h = snapshot.header;
+  // Parts of ticks older than the newest complete list are late; a newer tick restarts
+  // the assembly.
+  if (interactions_version_ > 0 && !tickAfter(h.tick, interactions_.tick)) return;
+  if (pending_part_count_ == 0 || tickAfter(h.tick, pending_interactions_.tick)) {
+    pending_interactions_.tick = h.tick;
+    pending_interactions_.server_time = h.server_time;
+    pending_interactions_.truncated = false;
+    pending_interactions_.pairs.clear();
+    pending_part_count_ = h.part_count;
+    pending_parts_ = 0;
+  } else if (h.tick != pending_interactions_.tick) {
+    return;  // older than the one being assembled
+  }
+  const std::uint32_t bit = 1u << h.part;
+  if (h.part_count != pending_part_count_ || (pending_parts_ & bit) != 0) return;
+  pending_parts_ |= bit;
+
+  // This part's pairs, named by the server's ids.
+  const wire::InteractionSection& x = snapshot.interactions;
+  const auto m = x.member_ids.size();
+  const auto ref = [&](std::uint8_t body, std::uint16_t prim) {
+    ServerBodyPrim r;
+    r.is_prop = body >= m;
+    r.id = r.is_prop ? x.prop_ids[body - m] : x.member_ids[body];
+    r.prim = prim;
+    return r;
+  };
+  for (const wire::WirePair& p : x.pairs) {
+    pending_interactions_.pairs.push_back({ref(p.body_a, p.prim_a), ref(p.body_b, p.prim_b)});
+  }
+  if ((x.flags & wire::kInteractionsTruncated) != 0) pending_interactions_.truncated = true;
+
+  // All parts here: it becomes the newest list.
+  const std::uint32_t all =
+      pending_part_count_ >= 32 ? 0xFFFFFFFFu : (1u << pending_part_count_) - 1u;
+  if (pending_parts_ == all) {
+    std::swap(interactions_, pending_interactions_);
+    ++interactions_version_;
+    pending_part_count_ = 0;
   }
 }
 
@@ -397,6 +511,61 @@ const RemoteMember* ClientSession::findMember(std::uint32_t id) const {
 bool ClientSession::samplePosture(std::uint32_t member_id, double server_time, Posture& out) const {
   const RemoteMember* m = findMember(member_id);
   return m != nullptr && m->buffer.sample(server_time, out);
+}
+
+const RemoteProp* ClientSession::findProp(std::uint32_t id) const {
+  for (const auto& p : props_) {
+    if (p->id == id) return p.get();
+  }
+  return nullptr;
+}
+
+bool ClientSession::sampleProp(std::uint32_t prop_id, double server_time, PropSample& out) const {
+  const RemoteProp* p = findProp(prop_id);
+  return p != nullptr && p->track.sample(server_time, out);
+}
+
+int ClientSession::sceneIndex(const ServerBodyPrim& body) const {
+  if (body.is_prop) {
+    for (std::size_t k = 0; k < props_.size(); ++k) {
+      if (props_[k]->id == body.id) return static_cast<int>(members_.size() + k);
+    }
+  } else {
+    for (std::size_t i = 0; i < members_.size(); ++i) {
+      if (members_[i]->id == body.id) return static_cast<int>(i);
+    }
+  }
+  return -1;
+}
+
+Status ClientSession::sceneInteractions(std::span<const BodyView> bodies, InteractionList& out,
+                                        int* dropped) const {
+  // Server ids -> scene indices; pairs with a body the caller does not have are left out.
+  out.pairs.clear();
+  int left_out = 0;
+  for (const ServerPair& p : interactions_.pairs) {
+    const int a = sceneIndex(p.a);
+    const int b = sceneIndex(p.b);
+    const auto posed = [&](int i) {
+      return i >= 0 && static_cast<std::size_t>(i) < bodies.size() &&
+             bodies[static_cast<std::size_t>(i)].posed != nullptr;
+    };
+    if (!posed(a) || !posed(b)) {
+      ++left_out;
+      continue;
+    }
+    out.pairs.push_back(
+        {static_cast<std::uint16_t>(a), p.a.prim, static_cast<std::uint16_t>(b), p.b.prim});
+  }
+  if (dropped != nullptr) *dropped = left_out;
+  // Canonical order, then the same checks a locally built list would pass.
+  finalizeInteractions(out, static_cast<int>(bodies.size()));
+  if (Status st = validateInteractions(out, bodies); !st) {
+    out.pairs.clear();
+    finalizeInteractions(out, static_cast<int>(bodies.size()));
+    return fail("interactions of tick {}: {}", interactions_.tick, st.error().message);
+  }
+  return {};
 }
 
 }  // namespace vistel::net

@@ -10,6 +10,13 @@
 // a server ErrorReply, a disconnect, a handshake timeout, server silence, a protocol
 // violation). Input that breaks the protocol from the server closes the session with a
 // message; malformed datagrams are only counted.
+//
+// The shared room's collision world (DESIGN.md §6: the server owns it): the session keeps
+// the room's props (static spec from the Roster, states from snapshots in a PropTrack
+// each) and the newest complete interaction list the server computed (Step 1 across and
+// within bodies, assembled from its parts), in the server's ids. sceneInteractions()
+// maps that list onto the caller's scene: body i < members().size() is members()[i], body
+// members().size() + k is props()[k] ("scene order"), and validates it.
 #pragma once
 
 #include <cstdint>
@@ -23,8 +30,12 @@
 #include "client/net/avatar_cache.hpp"
 #include "client/net/clock_sync.hpp"
 #include "client/net/jitter_buffer.hpp"
+#include "client/net/prop_track.hpp"
 #include "client/net/session_stats.hpp"
 #include "common/anim/posture.hpp"
+#include "common/base/result.hpp"
+#include "common/deform/interactions.hpp"
+#include "common/deform/prop.hpp"
 #include "common/wire/framing.hpp"
 #include "common/wire/packets.hpp"
 
@@ -36,7 +47,7 @@ class AvatarChunk;
 
 namespace vistel::net {
 
-inline constexpr std::uint32_t kProtocolVersion = 1;
+inline constexpr std::uint32_t kProtocolVersion = 2;
 
 struct SessionSettings {
   std::string room;
@@ -56,6 +67,7 @@ struct SessionSettings {
   int clock_window = 16;                     // ClockSync window
   double server_timeout_s = 10.0;            // no datagram from the server this long: closed
   int jitter_capacity = 32;                  // postures kept per remote member
+  int prop_track_capacity = 32;              // states kept per prop
   std::size_t max_frame_bytes = 1u << 20;    // control frames accepted from the server
   std::size_t max_avatar_bytes = 64u << 20;  // avatar files accepted from the server
   bool fetch_avatars = true;                 // request unknown avatars (needs a cache)
@@ -80,6 +92,36 @@ struct RemoteMember {
   Seat seat;
   bool is_self = false;
   JitterBuffer buffer;  // its postures, server clock (empty for self)
+};
+
+// A prop of the room (Roster), with its states (snapshots).
+struct RemoteProp {
+  std::uint32_t id = 0;          // prop id (its own id space, apart from member ids)
+  BallSpec ball;                 // radius, reach, stiffness (kRigidStiffness: rigid),
+                                 // elasticity, time constant: makeBall(ball) draws it
+  float mass = 0.0f;             // kg
+  float restitution = 0.0f;      // [0, 1]
+  std::uint32_t spawned_by = 0;  // member id; 0 = the server's config
+  PropTrack track;               // centre and velocity over time, server clock
+};
+
+// One end of a received interaction pair, in the server's names.
+struct ServerBodyPrim {
+  bool is_prop = false;
+  std::uint32_t id = 0;    // member id or prop id
+  std::uint16_t prim = 0;  // primitive index in that body's PrimitiveSet
+};
+struct ServerPair {
+  ServerBodyPrim a;
+  ServerBodyPrim b;
+};
+
+// The newest complete interaction list (all parts of one tick).
+struct ReceivedInteractions {
+  std::uint32_t tick = 0;
+  double server_time = 0.0;  // of the tick (the postures and prop states it was computed from)
+  bool truncated = false;    // the server had more pairs than it sent (self-contact first)
+  std::vector<ServerPair> pairs;
 };
 
 // What the session wants sent; the driver (or test) takes it and clears it.
@@ -115,6 +157,9 @@ class ClientSession {
   bool sendPosture(const Posture& posture, double now);
   // Sends Leave and asks the driver to close; the state becomes kClosed.
   void leave(const std::string& reason);
+  // Asks the server for a ball above our head (SpawnProp over TCP; the server rate-limits
+  // and places it). False, nothing sent, before the Welcome or after closing.
+  bool requestBall();
 
   SessionState state() const { return state_; }
   const std::string& error() const { return error_; }
@@ -128,6 +173,28 @@ class ClientSession {
   // The posture of a remote member at a server time (see JitterBuffer::sample).
   bool samplePosture(std::uint32_t member_id, double server_time, Posture& out) const;
   const SessionStats& stats() const { return stats_; }
+
+  // The room's props, in the server's order (the Roster's).
+  const std::vector<std::unique_ptr<RemoteProp>>& props() const { return props_; }
+  const RemoteProp* findProp(std::uint32_t id) const;
+  // A prop's state at a server time (PropTrack::sample). False for an unknown prop or one
+  // without states yet.
+  bool sampleProp(std::uint32_t prop_id, double server_time, PropSample& out) const;
+
+  // The newest complete interaction list, in server ids; its tick and time say how fresh
+  // it is (none yet: empty, tick 0). interactionsVersion() counts the lists received.
+  const ReceivedInteractions& latestInteractions() const { return interactions_; }
+  std::uint64_t interactionsVersion() const { return interactions_version_; }
+  // Maps the newest list onto the caller's scene (`bodies` in scene order, see above:
+  // members() then props(), posed by the caller; a null posed set marks a body it does not
+  // have, e.g. an avatar not yet fetched): pairs naming a body that is not in the scene or
+  // not posed are left out (counted in *dropped), the rest are finalized for
+  // bodies.size() bodies and checked with validateInteractions. On a failed check (a
+  // primitive the body does not have, a pair its graph forbids: the caller's avatar is not
+  // the server's) `out` is left empty and the error names the pair. Allocation-free once
+  // `out` has grown.
+  Status sceneInteractions(std::span<const BodyView> bodies, InteractionList& out,
+                           int* dropped = nullptr) const;
   // Increments whenever the roster changes (for callers that rebuild views).
   std::uint64_t rosterVersion() const { return roster_version_; }
 
@@ -144,6 +211,10 @@ class ClientSession {
   void handleRoster(const control::Roster& roster);
   void handleChunk(const control::AvatarChunk& chunk);
   void handleSnapshot(std::span<const std::uint8_t> datagram, double now);
+  void handleProps(const control::Roster& roster);
+  void handleInteractionPart(const wire::Snapshot& snapshot);
+  // Scene index of a server body, or -1.
+  int sceneIndex(const ServerBodyPrim& body) const;
   void uploadAvatar(std::size_t chunk_bytes);
   void requestMissingAvatars();
   void sendHello(double now);
@@ -179,9 +250,15 @@ class ClientSession {
   std::unordered_map<std::string, Download> downloads_;  // by hash
 
   SessionStats stats_;
+  std::vector<std::unique_ptr<RemoteProp>> props_;
+  ReceivedInteractions interactions_;  // newest complete list
+  std::uint64_t interactions_version_ = 0;
+  ReceivedInteractions pending_interactions_;  // the tick being assembled
+  std::uint8_t pending_part_count_ = 0;        // 0: none pending
+  std::uint32_t pending_parts_ = 0;            // bit per part received
+
   // Scratch, reused per datagram.
-  wire::SnapshotHeader snapshot_header_;
-  std::vector<wire::SnapshotEntry> snapshot_entries_;
+  wire::Snapshot snapshot_;
   Posture scratch_posture_;
   wire::PosturePacket scratch_packet_;
 };

@@ -139,6 +139,16 @@ bool NetDriver::sendPosture(const Posture& posture) {
   return sent;
 }
 
+bool NetDriver::requestBall() {
+  bool sent = false;
+  {
+    std::lock_guard lock(mutex_);
+    sent = session_.requestBall();
+  }
+  if (sent) asio::post(strand_, [self = shared_from_this()] { self->flush(); });
+  return sent;
+}
+
 SessionState NetDriver::state() const {
   std::lock_guard lock(mutex_);
   return session_.state();

@@ -49,6 +49,8 @@ class NetDriver : public std::enable_shared_from_this<NetDriver> {
 
   // Thread-safe calls.
   bool sendPosture(const Posture& posture);
+  // ClientSession::requestBall (a ball above our head; the server rate-limits).
+  bool requestBall();
   SessionState state() const;
   std::string error() const;
   // Runs f(session, now) under the session lock (keep it short: the network waits).

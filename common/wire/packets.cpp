@@ -6,7 +6,7 @@
 namespace vistel::wire {
 namespace {
 
-constexpr std::size_t kSnapshotCountOffset = 14;
+constexpr std::size_t kSnapshotCountOffset = 14;  // entry_count
 
 template <typename Packet>
 void writeAny(const Packet& p, std::vector<std::uint8_t>& out) {
@@ -86,6 +86,8 @@ std::size_t measure(const PingPacket& p) { return measureAny(p); }
 std::size_t measure(const HelloAckPacket& p) { return measureAny(p); }
 std::size_t measure(const PongPacket& p) { return measureAny(p); }
 std::size_t measure(const SnapshotEntry& e) { return measureAny(e); }
+std::size_t measure(const Snapshot& s) { return measureAny(s); }
+void write(const Snapshot& s, std::vector<std::uint8_t>& out) { writeAny(s, out); }
 
 void writeRecord(const PostureRecord& record, std::vector<std::uint8_t>& out) {
   writeAny(record, out);
@@ -105,25 +107,31 @@ void appendSnapshotEntry(std::uint32_t member_id, std::span<const std::uint8_t> 
   out.insert(out.end(), record_bytes.begin(), record_bytes.end());
 }
 
+void appendSnapshotWorld(std::span<const std::uint8_t> world_bytes,
+                         std::vector<std::uint8_t>& out) {
+  assert(out.size() >= kSnapshotHeaderBytes);
+  out.insert(out.end(), world_bytes.begin(), world_bytes.end());
+}
+
 void finishSnapshot(std::uint8_t entry_count, std::vector<std::uint8_t>& out) {
   assert(out.size() >= kSnapshotHeaderBytes);
   out[kSnapshotCountOffset] = entry_count;
 }
 
-bool readSnapshot(std::span<const std::uint8_t> datagram, SnapshotHeader& header,
-                  std::vector<SnapshotEntry>& entries) {
+void writeSnapshotWorld(std::span<const PropStateRecord> props, const InteractionSection* section,
+                        std::vector<std::uint8_t>& out) {
+  WriteStream s(out);
+  for (PropStateRecord p : props) serialize(s, p);
+  // The section's serialize takes a mutable reference only to share the read path; writing
+  // does not modify it.
+  if (section != nullptr) serialize(s, const_cast<InteractionSection&>(*section));
+  s.align();
+}
+
+bool readSnapshot(std::span<const std::uint8_t> datagram, Snapshot& out) {
   if (datagram.size() > kMaxDatagramBytes) return false;
   ReadStream s(datagram);
-  if (!serialize(s, header) || !finite(header.server_time)) return false;
-  // Each entry takes at least 4 + 13 bytes: refuse counts the datagram cannot hold
-  // before sizing anything.
-  const std::size_t min_entry = kSnapshotEntryOverhead + kPostureHeaderBytes;
-  if (header.entry_count > s.bitsLeft() / 8 / min_entry) return false;
-  entries.resize(header.entry_count);
-  for (SnapshotEntry& e : entries) {
-    if (!serialize(s, e)) return false;
-  }
-  return s.atEnd();
+  return serialize(s, out) && finite(out.header.server_time) && s.atEnd();
 }
 
 }  // namespace vistel::wire

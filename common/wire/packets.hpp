@@ -15,23 +15,26 @@
 
 #include "common/wire/bit_stream.hpp"
 #include "common/wire/posture_codec.hpp"
+#include "common/wire/world_state.hpp"
 
 namespace vistel::wire {
 
-inline constexpr std::uint8_t kWireVersion = 1;
+// Version 2 added the collision world to snapshots (props, interaction lists).
+inline constexpr std::uint8_t kWireVersion = 2;
 // Largest UDP payload either side sends (stays below common path MTUs). Readers reject
 // anything larger.
 inline constexpr std::size_t kMaxDatagramBytes = 1200;
 inline constexpr std::size_t kClientHeaderBytes = 14;
-inline constexpr std::size_t kSnapshotHeaderBytes = 15;
+inline constexpr std::size_t kSnapshotHeaderBytes = 18;
 inline constexpr std::size_t kSnapshotEntryOverhead = 4;  // member id before each record
+inline constexpr int kMaxInteractionParts = 32;           // datagrams of one tick's list
 
 enum class PacketType : std::uint8_t {
   kHello = 0x01,     // client -> server: bind this endpoint to (member id, key)
   kPosture = 0x02,   // client -> server: the sender's newest posture
   kPing = 0x03,      // client -> server: clock-offset probe
   kHelloAck = 0x81,  // server -> client: endpoint bound
-  kSnapshot = 0x82,  // server -> client: other members' newest postures
+  kSnapshot = 0x82,  // server -> client: other members' newest postures, props, interactions
   kPong = 0x83,      // server -> client: answer to a ping with the server's clock
 };
 
@@ -68,14 +71,26 @@ struct PongPacket {
 };
 
 struct SnapshotHeader {
-  std::uint32_t tick = 0;    // room tick counter
-  double server_time = 0.0;  // server clock at the tick, seconds
-  std::uint8_t entry_count = 0;
+  std::uint32_t tick = 0;        // room tick counter
+  double server_time = 0.0;      // server clock at the tick, seconds
+  std::uint8_t entry_count = 0;  // posture entries
+  std::uint8_t prop_count = 0;   // prop states
+  std::uint8_t part = 0;         // which part of the tick's interaction list this carries
+  std::uint8_t part_count = 0;   // parts of the tick's list (1..32); 0 = no section here
 };
 
 struct SnapshotEntry {
   std::uint32_t member_id = 0;
   PostureRecord record;
+};
+
+// A whole snapshot datagram as read (vectors are resized; reuse the struct to avoid
+// allocating per packet).
+struct Snapshot {
+  SnapshotHeader header;
+  std::vector<SnapshotEntry> entries;  // (entry_count)
+  std::vector<PropStateRecord> props;  // (prop_count)
+  InteractionSection interactions;     // meaningful when header.part_count > 0
 };
 
 // ----- serialize functions (read, write, measure) -----
@@ -123,13 +138,50 @@ bool serialize(Stream& s, PongPacket& p) {
 
 template <typename Stream>
 bool serialize(Stream& s, SnapshotHeader& h) {
-  return serializeKind(s, PacketType::kSnapshot) && serializeU32(s, h.tick) &&
-         serializeF64(s, h.server_time) && serializeU8(s, h.entry_count);
+  if (!serializeKind(s, PacketType::kSnapshot) || !serializeU32(s, h.tick) ||
+      !serializeF64(s, h.server_time) || !serializeU8(s, h.entry_count) ||
+      !serializeU8(s, h.prop_count) || !serializeU8(s, h.part) || !serializeU8(s, h.part_count)) {
+    return false;
+  }
+  // A section is part `part` of `part_count`; without one, part is 0.
+  return h.part_count <= kMaxInteractionParts &&
+         (h.part_count == 0 ? h.part == 0 : h.part < h.part_count);
 }
 
 template <typename Stream>
 bool serialize(Stream& s, SnapshotEntry& e) {
   return serializeU32(s, e.member_id) && serialize(s, e.record);
+}
+
+// The whole datagram: header, entries, prop states, then the interaction section when
+// part_count > 0. Reading checks each count against the bytes left before sizing.
+template <typename Stream>
+bool serialize(Stream& s, Snapshot& x) {
+  if constexpr (!Stream::kReading) {
+    x.header.entry_count = static_cast<std::uint8_t>(x.entries.size());
+    x.header.prop_count = static_cast<std::uint8_t>(x.props.size());
+  }
+  if (!serialize(s, x.header)) return false;
+  if constexpr (Stream::kReading) {
+    const std::size_t min_entry = kSnapshotEntryOverhead + kPostureHeaderBytes;
+    if (x.header.entry_count > s.bitsLeft() / 8 / min_entry) return false;
+    x.entries.resize(x.header.entry_count);
+  }
+  for (SnapshotEntry& e : x.entries) {
+    if (!serialize(s, e)) return false;
+  }
+  if constexpr (Stream::kReading) {
+    if (x.header.prop_count > s.bitsLeft() / 8 / kPropStateBytes) return false;
+    x.props.resize(x.header.prop_count);
+  }
+  for (PropStateRecord& p : x.props) {
+    if (!serialize(s, p)) return false;
+  }
+  if (x.header.part_count == 0) {
+    if constexpr (Stream::kReading) x.interactions.clear();
+    return true;
+  }
+  return serialize(s, x.interactions);
 }
 
 // ----- whole datagrams -----
@@ -162,22 +214,33 @@ std::size_t measure(const PingPacket& p);
 std::size_t measure(const HelloAckPacket& p);
 std::size_t measure(const PongPacket& p);
 std::size_t measure(const SnapshotEntry& e);
+std::size_t measure(const Snapshot& s);
+
+// Writes a whole snapshot datagram (counts taken from the vectors).
+void write(const Snapshot& s, std::vector<std::uint8_t>& out);
 
 // Serialized bytes of a posture record alone (what a server keeps per member and copies
 // into snapshots).
 void writeRecord(const PostureRecord& record, std::vector<std::uint8_t>& out);
 
-// Snapshots are built incrementally: a header, then entries of a member id and the
-// record's bytes, then the count patched in. `out` must be empty at begin.
+// Snapshots are built incrementally, so that a server copies bytes it serialized once:
+// a header (its prop_count, part and part_count final; entry_count patched at the end),
+// entries of a member id and a record's bytes, then the world bytes (the prop states and
+// the interaction section, from writeSnapshotWorld, matching the header's counts), then
+// the entry count. `out` must be empty at begin. The result equals write(Snapshot).
 void beginSnapshot(const SnapshotHeader& header, std::vector<std::uint8_t>& out);
 void appendSnapshotEntry(std::uint32_t member_id, std::span<const std::uint8_t> record_bytes,
                          std::vector<std::uint8_t>& out);
+void appendSnapshotWorld(std::span<const std::uint8_t> world_bytes, std::vector<std::uint8_t>& out);
 void finishSnapshot(std::uint8_t entry_count, std::vector<std::uint8_t>& out);
 
-// Reads a whole snapshot datagram into header and entries (resized; reuse the vector
-// to avoid allocating per packet). All or nothing: false if any entry is malformed or
+// The world part of a snapshot: the prop states, then the section if not null (appended
+// to out; allocation-free once out has the capacity).
+void writeSnapshotWorld(std::span<const PropStateRecord> props, const InteractionSection* section,
+                        std::vector<std::uint8_t>& out);
+
+// Reads a whole snapshot datagram. All or nothing: false if any part is malformed or
 // bytes are left over.
-bool readSnapshot(std::span<const std::uint8_t> datagram, SnapshotHeader& header,
-                  std::vector<SnapshotEntry>& entries);
+bool readSnapshot(std::span<const std::uint8_t> datagram, Snapshot& out);
 
 }  // namespace vistel::wire

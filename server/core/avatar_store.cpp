@@ -34,10 +34,12 @@ Status AvatarStore::add(std::string_view hash, std::vector<std::uint8_t> bytes,
   }
   if (entries_.count(std::string(hash))) return {};
 
-  // Keep the file (for fetches) and the skeleton; the skin is not needed here.
+  // Keep the file (for fetches) and the collision model; the skin is not needed here.
+  auto collision = makeCollisionModel(std::move(*model), limits_, source);
+  if (!collision) return collision.error();
   StoredAvatar entry;
   entry.joint_count = joints;
-  entry.skeleton = std::make_shared<const Skeleton>(std::move(model->skeleton));
+  entry.collision = std::move(*collision);
   entry.bytes = std::make_shared<const std::vector<std::uint8_t>>(std::move(bytes));
   entries_.emplace(std::string(hash), std::move(entry));
   return {};

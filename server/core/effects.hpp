@@ -4,17 +4,51 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include <glm/glm.hpp>
+
 #include "common/wire/endpoint.hpp"
+#include "server/core/collision_model.hpp"
 #include "server/core/handles.hpp"
+#include "server/core/props.hpp"
+#include "server/core/seat.hpp"
 
 namespace vistel::server {
 
 struct OutDatagram {
   wire::Endpoint to;
   std::vector<std::uint8_t> bytes;
+};
+
+// Outgoing datagrams whose slots (and their byte buffers) survive clear(), so that a
+// room's tick, once warmed up, allocates nothing to send its snapshots.
+class DatagramQueue {
+ public:
+  // A slot at the end: its bytes empty, with the capacity they had.
+  OutDatagram& emplace_back() {
+    if (size_ == slots_.size()) slots_.emplace_back();
+    OutDatagram& d = slots_[size_++];
+    d.bytes.clear();
+    return d;
+  }
+  std::size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  OutDatagram& operator[](std::size_t i) { return slots_[i]; }
+  const OutDatagram& operator[](std::size_t i) const { return slots_[i]; }
+  OutDatagram& back() { return slots_[size_ - 1]; }
+  OutDatagram* begin() { return slots_.data(); }
+  OutDatagram* end() { return slots_.data() + size_; }
+  const OutDatagram* begin() const { return slots_.data(); }
+  const OutDatagram* end() const { return slots_.data() + size_; }
+  // Forgets the datagrams, keeping the slots.
+  void clear() { size_ = 0; }
+
+ private:
+  std::vector<OutDatagram> slots_;
+  std::size_t size_ = 0;
 };
 
 struct OutFrame {
@@ -28,10 +62,14 @@ struct RoomCommand {
   enum class Kind {
     kCreate,        // room, name
     kClose,         // room (it is empty)
-    kAddMember,     // room, member, key, joint_count (0 until the avatar is ready)
+    kAddMember,     // room, member, key, seat, joint_count and collision (0 and null until
+                    // the avatar is ready)
     kRemoveMember,  // room, member
     kBindEndpoint,  // room, member, endpoint (UDP hello accepted)
-    kSetAvatar,     // room, member, joint_count
+    kSetAvatar,     // room, member, joint_count, collision
+    kSpawnProp,     // room, prop, prop_spec, then position/velocity, or (member != 0) above
+                    // that member's head
+    kRemoveProp,    // room, prop
   };
   Kind kind = Kind::kCreate;
   RoomId room;
@@ -39,11 +77,17 @@ struct RoomCommand {
   std::uint64_t key = 0;
   wire::Endpoint endpoint;
   int joint_count = 0;
+  std::shared_ptr<const CollisionModel> collision;
+  SeatPlacement seat;
+  PropId prop;
+  PropSpec prop_spec;
+  glm::vec3 position{0.0f};  // room space, metres
+  glm::vec3 velocity{0.0f};  // m/s
   std::string name;
 };
 
 struct Effects {
-  std::vector<OutDatagram> datagrams;
+  DatagramQueue datagrams;
   std::vector<OutFrame> frames;
   std::vector<ConnId> closes;              // close after the frames queued before it are written
   std::vector<RoomCommand> room_commands;  // lobby -> rooms

@@ -1,4 +1,4 @@
-// Handles with generations for members and rooms (as Box2D's ids): a 32-bit value whose
+// Handles with generations for members, rooms and props (as Box2D's ids): a 32-bit value whose
 // low 16 bits name a slot and high 16 bits the slot's generation, bumped on every
 // release, so a stale handle (a member that left, a packet from a previous session)
 // never aliases a newer occupant. Value 0 is never issued.
@@ -17,6 +17,13 @@ struct MemberId {
 struct RoomId {
   std::uint32_t value = 0;
   bool operator==(const RoomId&) const = default;
+};
+
+// A prop of a room (from its own pool: prop and member ids may share values, so the wire
+// always says which kind an id is).
+struct PropId {
+  std::uint32_t value = 0;
+  bool operator==(const PropId&) const = default;
 };
 
 using ConnId = std::uint64_t;  // a TCP connection, numbered by the shell (never reused)

@@ -12,8 +12,6 @@
 namespace vistel::server {
 namespace {
 
-constexpr int kSeatsPerRing = 16;
-
 bool validRoomName(const std::string& s) {
   if (s.empty() || s.size() > 64) return false;
   return std::all_of(s.begin(), s.end(), [](char c) {
@@ -30,33 +28,35 @@ bool validMemberName(const std::string& s) {
   });
 }
 
-// Bit-reversal of a 4-bit seat number: 0, 8, 4, 12, 2, ... spreads the first comers.
-int spreadOrder(int i) {
-  int r = 0;
-  for (int b = 0; b < 4; ++b) r |= ((i >> b) & 1) << (3 - b);
-  return r;
+constexpr double kMiB = 1024.0 * 1024.0;
+
+CollisionLimits collisionLimits(const ServerConfig& config) {
+  CollisionLimits limits;
+  limits.max_primitives = config.max_primitives_per_avatar;
+  limits.max_extent_m = config.max_primitive_extent_m;
+  return limits;
+}
+
+control::PropInfo::Elasticity toProto(Elasticity e) {
+  switch (e) {
+    case Elasticity::kPlastic:
+      return control::PropInfo::PLASTIC;
+    case Elasticity::kViscoelastic:
+      return control::PropInfo::VISCOELASTIC;
+    case Elasticity::kElastic:
+      break;
+  }
+  return control::PropInfo::ELASTIC;
 }
 
 }  // namespace
-
-SeatPlacement seatPlacement(int index, float radius) {
-  const int ring = index / kSeatsPerRing;
-  const float r = radius * (1.0f + 0.6f * static_cast<float>(ring));
-  const float theta = 2.0f * std::numbers::pi_v<float> *
-                      static_cast<float>(spreadOrder(index % kSeatsPerRing)) /
-                      static_cast<float>(kSeatsPerRing);
-  SeatPlacement s;
-  s.x = r * std::sin(theta);
-  s.z = r * std::cos(theta);
-  s.yaw = theta + std::numbers::pi_v<float>;  // +Z turned to face the centre
-  if (s.yaw > std::numbers::pi_v<float>) s.yaw -= 2.0f * std::numbers::pi_v<float>;
-  return s;
-}
 
 Lobby::Lobby(const ServerConfig& config, std::uint64_t seed)
     : config_(config),
       member_ids_(config.max_members),
       room_ids_(config.max_rooms),
+      prop_ids_(std::min(65535, std::max(1, config.max_rooms * config.max_props_per_room))),
+      store_(collisionLimits(config)),
       seed_(seed),
       rng_(seed) {}
 
@@ -92,9 +92,20 @@ void Lobby::send(ConnId conn, const control::ServerMessage& message, Effects& fx
       std::span(reinterpret_cast<const std::uint8_t*>(payload.data()), payload.size()), f.bytes);
 }
 
+std::vector<PropId> Lobby::propsOf(std::string_view room) const {
+  std::vector<PropId> out;
+  auto it = room_by_name_.find(std::string(room));
+  if (it == room_by_name_.end()) return out;
+  for (const PropRecord& p : rooms_.at(it->second).props) out.push_back(p.id);
+  return out;
+}
+
 void Lobby::onConnect(ConnId conn, double now, Effects& /*fx*/) {
   auto [it, inserted] = connections_.try_emplace(conn, config_.max_frame_bytes);
-  if (inserted) it->second.opened_at = now;
+  if (inserted) {
+    it->second.opened_at = now;
+    it->second.control = TokenBucket(config_.control_rate_hz, config_.control_burst, now);
+  }
 }
 
 void Lobby::onStreamBytes(ConnId conn, std::span<const std::uint8_t> bytes, double now,
@@ -130,6 +141,23 @@ void Lobby::handleMessage(ConnId conn, Connection& c, std::span<const std::uint8
            fmt::format("unparsable control message of {} bytes", payload.size()), now, fx);
     return;
   }
+  // Rate: every message but the chunks of an announced upload costs a token (an avatar
+  // request one more per MiB it makes us send); a sender out of tokens is dropped.
+  double cost = 1.0;
+  if (msg.body_case() == control::ClientMessage::kAvatarChunk && c.upload_reserved > 0) {
+    cost = 0.0;
+  } else if (msg.body_case() == control::ClientMessage::kAvatarRequest) {
+    if (const StoredAvatar* a = store_.find(msg.avatar_request().hash())) {
+      cost += std::floor(static_cast<double>(a->bytes->size()) / kMiB);
+    }
+  }
+  if (cost > 0.0 && !c.control.take(now, cost)) {
+    reject(conn, control::ErrorReply::RATE_LIMITED,
+           fmt::format("control messages faster than {:.0f}/s (bursts of {})",
+                       config_.control_rate_hz, config_.control_burst),
+           now, fx, "control message rate");
+    return;
+  }
   // Before joining only Join is allowed; after, anything but Join.
   const bool joined = c.member.value != 0;
   switch (msg.body_case()) {
@@ -144,6 +172,7 @@ void Lobby::handleMessage(ConnId conn, Connection& c, std::span<const std::uint8
       if (!joined) break;
       spdlog::info("lobby: member {:#x} leaves: {}", c.member.value,
                    msg.leave().reason().empty() ? "no reason given" : msg.leave().reason());
+      endUpload(c);
       removeMember(c.member, "left", fx);
       connections_.erase(conn);
       fx.closes.push_back(conn);
@@ -155,6 +184,10 @@ void Lobby::handleMessage(ConnId conn, Connection& c, std::span<const std::uint8
     case control::ClientMessage::kAvatarRequest:
       if (!joined) break;
       handleRequest(conn, msg.avatar_request(), now, fx);
+      return;
+    case control::ClientMessage::kSpawnProp:
+      if (!joined) break;
+      handleSpawn(c, msg.spawn_prop(), now, fx);
       return;
     case control::ClientMessage::BODY_NOT_SET:
       break;
@@ -219,6 +252,16 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
     reject(conn, control::ErrorReply::SERVER_FULL, "the server is full", now, fx);
     return;
   }
+  // An upload reserves its offered size against the server's total.
+  if (stored == nullptr &&
+      upload_bytes_in_flight_ + join.avatar_size() > config_.max_upload_bytes_total) {
+    reject(conn, control::ErrorReply::SERVER_FULL,
+           fmt::format("too many avatar uploads in progress ({} of {} bytes reserved); try "
+                       "again later",
+                       upload_bytes_in_flight_, config_.max_upload_bytes_total),
+           now, fx, "upload capacity");
+    return;
+  }
   if (room == nullptr) {
     const std::uint32_t rid = room_ids_.allocate();
     if (rid == 0) {
@@ -237,6 +280,10 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
     fx.room_commands.push_back(cmd);
     spdlog::info("lobby: room '{}' created", r.name);
     room = &r;
+    // The props every room starts with.
+    for (const RoomPropConfig& p : config_.room_props) {
+      spawnProp(r, p.spec, MemberId{}, p.position, p.velocity, fx);
+    }
   }
 
   // Create the member: id, key, seat, avatar state.
@@ -260,6 +307,10 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
     m.avatar_ready = true;
     m.joint_count = stored->joint_count;
     store_.addRef(m.avatar_hash);
+  } else {
+    c.upload_reserved = m.avatar_size;
+    c.upload_progress_at = now;
+    upload_bytes_in_flight_ += c.upload_reserved;
   }
   room->members.push_back(m.id);
   c.member = m.id;
@@ -270,6 +321,8 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
   add.member = m.id;
   add.key = m.key;
   add.joint_count = m.joint_count;
+  add.seat = seatPlacement(m.seat, config_.seat_radius_m);
+  if (stored != nullptr) add.collision = stored->collision;
   fx.room_commands.push_back(add);
 
   // Welcome, then the new roster to everyone in the room.
@@ -296,7 +349,7 @@ void Lobby::handleChunk(ConnId conn, Connection& c, const control::AvatarChunk& 
                         Effects& fx) {
   Member* m = findMember(c.member.value);
   if (m == nullptr) return;
-  if (m->avatar_ready) return;  // someone else uploaded the same avatar meanwhile
+  if (m->avatar_ready || c.upload_reserved == 0) return;  // someone else uploaded it meanwhile
   // The chunk must continue exactly the offered file.
   std::string problem;
   if (chunk.hash() != m->avatar_hash) {
@@ -317,13 +370,14 @@ void Lobby::handleChunk(ConnId conn, Connection& c, const control::AvatarChunk& 
     return;
   }
   c.upload.insert(c.upload.end(), chunk.data().begin(), chunk.data().end());
+  c.upload_progress_at = now;
   if (c.upload.size() < m->avatar_size) return;
 
   // Complete: validate and store, then everyone waiting for it is ready.
   const std::string hash = m->avatar_hash;
   Status added =
       store_.add(hash, std::move(c.upload), fmt::format("avatar upload from '{}'", m->name));
-  c.upload.clear();
+  endUpload(c);
   if (!added) {
     reject(conn, control::ErrorReply::AVATAR_REJECTED, added.error().message, now, fx);
     return;
@@ -342,11 +396,16 @@ void Lobby::avatarBecameReady(const std::string& hash, Effects& fx) {
     m.avatar_ready = true;
     m.joint_count = stored->joint_count;
     store_.addRef(hash);
+    // A member still uploading the same file need not finish.
+    if (auto conn = connections_.find(m.conn); conn != connections_.end()) {
+      endUpload(conn->second);
+    }
     RoomCommand cmd;
     cmd.kind = RoomCommand::Kind::kSetAvatar;
     cmd.room = m.room;
     cmd.member = m.id;
     cmd.joint_count = m.joint_count;
+    cmd.collision = stored->collision;
     fx.room_commands.push_back(cmd);
     control::ServerMessage msg;
     msg.mutable_avatar_accepted()->set_hash(hash);
@@ -380,6 +439,78 @@ void Lobby::handleRequest(ConnId conn, const control::AvatarRequest& request, do
     chunk.set_data(reinterpret_cast<const char*>(bytes.data() + offset), n);
     send(conn, msg, fx);
   }
+}
+
+void Lobby::endUpload(Connection& c) {
+  upload_bytes_in_flight_ -= std::min(upload_bytes_in_flight_, c.upload_reserved);
+  c.upload_reserved = 0;
+  c.upload = {};  // gives the memory back
+}
+
+void Lobby::handleSpawn(Connection& c, const control::SpawnProp& spawn, double now, Effects& fx) {
+  Member* m = findMember(c.member.value);
+  if (m == nullptr) return;
+  // Validate: a known kind, props enabled, the member's avatar here, not too often.
+  std::string_view problem;
+  if (spawn.kind() != control::SpawnProp::BALL) {
+    problem = "unknown prop kind";
+  } else if (config_.max_props_per_room == 0) {
+    problem = "props disabled";
+  } else if (!m->avatar_ready) {
+    problem = "avatar not ready";
+  } else if (now - m->last_spawn < config_.spawn_interval_s) {
+    problem = "spawn rate";
+  }
+  if (!problem.empty()) {
+    drops_.drop(now, problem, fmt::format("spawn request of member {:#x} ignored", m->id.value));
+    return;
+  }
+  // Make room: the oldest prop a client spawned goes.
+  RoomRecord& room = rooms_.at(m->room.value);
+  if (static_cast<int>(room.props.size()) >= config_.max_props_per_room) {
+    auto oldest = std::find_if(room.props.begin(), room.props.end(),
+                               [](const PropRecord& p) { return p.spawned_by.value != 0; });
+    if (oldest == room.props.end()) {
+      drops_.drop(now, "room full of props",
+                  fmt::format("spawn request of member {:#x} ignored", m->id.value));
+      return;
+    }
+    RoomCommand remove;
+    remove.kind = RoomCommand::Kind::kRemoveProp;
+    remove.room = room.id;
+    remove.prop = oldest->id;
+    fx.room_commands.push_back(remove);
+    prop_ids_.release(oldest->id.value);
+    room.props.erase(oldest);
+  }
+  // Above the member's head (the room knows its posture); the seat's column as fallback.
+  const SeatPlacement seat = seatPlacement(m->seat, config_.seat_radius_m);
+  const glm::vec3 fallback(seat.x, 2.3f, seat.z);
+  if (!spawnProp(room, config_.spawn_ball, m->id, fallback, glm::vec3(0.0f), fx)) {
+    drops_.drop(now, "no free prop id",
+                fmt::format("spawn request of member {:#x} ignored", m->id.value));
+    return;
+  }
+  m->last_spawn = now;
+  spdlog::info("lobby: '{}' spawned a ball in room '{}'", m->name, room.name);
+  sendRoster(room, fx);
+}
+
+bool Lobby::spawnProp(RoomRecord& room, const PropSpec& spec, MemberId requester,
+                      const glm::vec3& position, const glm::vec3& velocity, Effects& fx) {
+  const std::uint32_t id = prop_ids_.allocate();
+  if (id == 0) return false;
+  room.props.push_back({PropId{id}, spec, requester});
+  RoomCommand cmd;
+  cmd.kind = RoomCommand::Kind::kSpawnProp;
+  cmd.room = room.id;
+  cmd.prop = PropId{id};
+  cmd.prop_spec = spec;
+  cmd.member = requester;
+  cmd.position = position;
+  cmd.velocity = velocity;
+  fx.room_commands.push_back(cmd);
+  return true;
 }
 
 void Lobby::onHello(std::span<const std::uint8_t> datagram, const wire::Endpoint& from, double now,
@@ -434,6 +565,7 @@ void Lobby::onHello(std::span<const std::uint8_t> datagram, const wire::Endpoint
 void Lobby::onDisconnect(ConnId conn, double /*now*/, Effects& fx) {
   auto it = connections_.find(conn);
   if (it == connections_.end()) return;
+  endUpload(it->second);
   if (it->second.member.value != 0) removeMember(it->second.member, "disconnected", fx);
   connections_.erase(it);
 }
@@ -447,12 +579,22 @@ void Lobby::onTimedOut(MemberId member, double now, Effects& fx) {
 
 void Lobby::update(double now, Effects& fx) {
   std::vector<ConnId> late;
+  std::vector<ConnId> stalled;
   for (const auto& [conn, c] : connections_) {
     if (c.member.value == 0 && now - c.opened_at > config_.join_timeout_s) late.push_back(conn);
+    if (c.upload_reserved > 0 && now - c.upload_progress_at > config_.upload_stall_timeout_s) {
+      stalled.push_back(conn);
+    }
   }
   for (ConnId conn : late) {
     reject(conn, control::ErrorReply::TIMEOUT,
            fmt::format("no Join within {:.0f} s", config_.join_timeout_s), now, fx);
+  }
+  for (ConnId conn : stalled) {
+    reject(conn, control::ErrorReply::TIMEOUT,
+           fmt::format("avatar upload stalled (no chunk for {:.0f} s)",
+                       config_.upload_stall_timeout_s),
+           now, fx, "upload stalled");
   }
 }
 
@@ -465,7 +607,7 @@ void Lobby::shutdown(double now, Effects& fx) {
 }
 
 void Lobby::reject(ConnId conn, control::ErrorReply::Code code, const std::string& message,
-                   double now, Effects& fx) {
+                   double now, Effects& fx, std::string_view reason) {
   auto it = connections_.find(conn);
   if (it == connections_.end()) return;
   const std::string who = it->second.member.value != 0
@@ -474,13 +616,16 @@ void Lobby::reject(ConnId conn, control::ErrorReply::Code code, const std::strin
   if (code == control::ErrorReply::SHUTTING_DOWN) {
     spdlog::debug("lobby: closing {}: {}", who, message);
   } else {
-    drops_.drop(now, control::ErrorReply::Code_Name(code), fmt::format("{}: {}", who, message));
+    drops_.drop(now,
+                reason.empty() ? std::string_view(control::ErrorReply::Code_Name(code)) : reason,
+                fmt::format("{}: {}", who, message));
   }
   control::ServerMessage msg;
   msg.mutable_error()->set_code(code);
   msg.mutable_error()->set_message(message);
   send(conn, msg, fx);
   fx.closes.push_back(conn);
+  endUpload(it->second);
   if (it->second.member.value != 0) removeMember(it->second.member, message, fx);
   connections_.erase(conn);
 }
@@ -515,6 +660,7 @@ void Lobby::removeMember(MemberId id, std::string_view reason, Effects& fx) {
     close.room = room.id;
     fx.room_commands.push_back(close);
     spdlog::info("lobby: room '{}' closed (empty)", room.name);
+    for (const PropRecord& p : room.props) prop_ids_.release(p.id.value);
     const std::uint32_t rid = room.id.value;
     room_by_name_.erase(room.name);
     room_ids_.release(rid);
@@ -539,6 +685,19 @@ void Lobby::sendRoster(const RoomRecord& room, Effects& fx) {
     info.mutable_seat()->set_x(seat.x);
     info.mutable_seat()->set_z(seat.z);
     info.mutable_seat()->set_yaw(seat.yaw);
+  }
+  for (const PropRecord& p : room.props) {
+    control::PropInfo& info = *roster.add_props();
+    info.set_prop_id(p.id.value);
+    info.set_kind(control::PropInfo::BALL);
+    info.set_radius(p.spec.ball.radius);
+    info.set_reach(p.spec.ball.reach);
+    info.set_mass(p.spec.mass);
+    info.set_restitution(p.spec.restitution);
+    info.set_stiffness(std::isinf(p.spec.ball.stiffness) ? 0.0f : p.spec.ball.stiffness);
+    info.set_elasticity(toProto(p.spec.ball.elasticity));
+    info.set_time_constant(p.spec.ball.time_constant);
+    info.set_spawned_by(p.spawned_by.value);
   }
   for (MemberId id : room.members) send(members_.at(id.value).conn, msg, fx);
 }

@@ -7,6 +7,20 @@
 // out-of-order control frame, or an invalid upload, gets an ErrorReply and the
 // connection is closed (logged with the reason); a bad hello is dropped (counted,
 // logged) and never answered. A hello is answered with fewer bytes than it carried.
+//
+// Limits against floods (ServerConfig [limits]): control messages per connection through
+// a token bucket (control_rate_hz sustained, control_burst at once; an AvatarRequest
+// costs one more token per MiB it makes the server send; avatar chunks of the offered
+// upload are free, bounded by the offered size instead): a faster sender is dropped with
+// RATE_LIMITED. Upload memory: a join whose avatar must be uploaded reserves its offered
+// size against max_upload_bytes_total (refused with SERVER_FULL beyond), released when the
+// upload ends either way; an upload without progress for upload_stall_timeout_s drops its
+// sender (TIMEOUT). Prop spawns: one per member per spawn_interval_s; faster requests are
+// ignored (logged).
+//
+// Props: the lobby owns each room's prop list (ids, specs; the Roster carries them) and
+// tells rooms to spawn and remove; rooms decide positions and step them. A room starts
+// with the config's [[prop]] entries.
 #pragma once
 
 #include <cstdint>
@@ -25,21 +39,13 @@
 #include "server/core/drop_log.hpp"
 #include "server/core/effects.hpp"
 #include "server/core/handles.hpp"
+#include "server/core/rate_limit.hpp"
+#include "server/core/seat.hpp"
 #include "server/core/server_config.hpp"
 
 namespace vistel::server {
 
-inline constexpr std::uint32_t kProtocolVersion = 1;
-
-// Where seat `index` of a room stands: on a circle of `radius` metres (a second, wider
-// ring past 16 seats), facing the centre. Seats fill in an order that spreads people
-// out: two members face each other, four form a square.
-struct SeatPlacement {
-  float x = 0.0f;
-  float z = 0.0f;
-  float yaw = 0.0f;  // radians about +Y; the avatar faces +Z at 0
-};
-SeatPlacement seatPlacement(int index, float radius);
+inline constexpr std::uint32_t kProtocolVersion = 2;
 
 class Lobby {
  public:
@@ -64,6 +70,10 @@ class Lobby {
   int roomCount() const { return static_cast<int>(rooms_.size()); }
   const AvatarStore& avatars() const { return store_; }
   const DropLog& drops() const { return drops_; }
+  // Bytes reserved by unfinished avatar uploads (all connections).
+  std::uint64_t uploadBytesInFlight() const { return upload_bytes_in_flight_; }
+  // Props of a room (by name) in spawn order; empty for an unknown room.
+  std::vector<PropId> propsOf(std::string_view room) const;
   // The room of a live member.
   std::optional<RoomId> roomOf(MemberId member) const;
 
@@ -72,8 +82,11 @@ class Lobby {
     explicit Connection(std::size_t max_frame) : decoder(max_frame) {}
     wire::FrameDecoder decoder;
     double opened_at = 0.0;
-    MemberId member;                   // 0 until joined
-    std::vector<std::uint8_t> upload;  // avatar bytes received so far
+    MemberId member;                    // 0 until joined
+    TokenBucket control;                // control message budget
+    std::vector<std::uint8_t> upload;   // avatar bytes received so far
+    std::uint64_t upload_reserved = 0;  // bytes counted in upload_bytes_in_flight_
+    double upload_progress_at = 0.0;    // last chunk (or the join)
   };
   struct Member {
     MemberId id;
@@ -88,12 +101,19 @@ class Lobby {
     int joint_count = 0;
     bool bound = false;
     wire::Endpoint endpoint;
+    double last_spawn = -1e300;
+  };
+  struct PropRecord {
+    PropId id;
+    PropSpec spec;
+    MemberId spawned_by;  // 0: the config
   };
   struct RoomRecord {
     RoomId id;
     std::string name;
     std::vector<MemberId> members;  // join order
     std::vector<bool> seat_taken;   // per seat
+    std::vector<PropRecord> props;  // spawn order
   };
 
   void handleMessage(ConnId conn, Connection& c, std::span<const std::uint8_t> payload, double now,
@@ -102,12 +122,20 @@ class Lobby {
   void handleChunk(ConnId conn, Connection& c, const control::AvatarChunk& chunk, double now,
                    Effects& fx);
   void handleRequest(ConnId conn, const control::AvatarRequest& request, double now, Effects& fx);
+  void handleSpawn(Connection& c, const control::SpawnProp& spawn, double now, Effects& fx);
+  // A prop into a room: allocates its id, tells the room (which places it: above
+  // `requester`'s head, else at position) and records it. False when no id is free.
+  bool spawnProp(RoomRecord& room, const PropSpec& spec, MemberId requester,
+                 const glm::vec3& position, const glm::vec3& velocity, Effects& fx);
+  // Gives back a connection's upload reservation and buffer.
+  void endUpload(Connection& c);
   // Every member waiting for this hash becomes ready (their rooms learn the joint count
   // and get a new roster).
   void avatarBecameReady(const std::string& hash, Effects& fx);
-  // Sends an ErrorReply, closes the connection and removes its member (logged).
+  // Sends an ErrorReply, closes the connection and removes its member (logged and counted
+  // under `reason`, by default the code's name).
   void reject(ConnId conn, control::ErrorReply::Code code, const std::string& message, double now,
-              Effects& fx);
+              Effects& fx, std::string_view reason = {});
   void removeMember(MemberId id, std::string_view reason, Effects& fx);
   void sendRoster(const RoomRecord& room, Effects& fx);
   void send(ConnId conn, const control::ServerMessage& message, Effects& fx);
@@ -117,12 +145,14 @@ class Lobby {
   ServerConfig config_;
   HandlePool member_ids_;
   HandlePool room_ids_;
+  HandlePool prop_ids_;
   std::unordered_map<ConnId, Connection> connections_;
   std::unordered_map<std::uint32_t, Member> members_;    // by MemberId value
   std::unordered_map<std::uint32_t, RoomRecord> rooms_;  // by RoomId value
   std::unordered_map<std::string, std::uint32_t> room_by_name_;
   std::unordered_map<wire::Endpoint, std::uint32_t, wire::EndpointHash> member_by_endpoint_;
   AvatarStore store_;
+  std::uint64_t upload_bytes_in_flight_ = 0;
   DropLog drops_{"lobby"};
   std::uint64_t seed_;
   std::mt19937_64 rng_;

@@ -7,12 +7,25 @@
 
 namespace vistel::server {
 
+RoomSettings roomSettings(const ServerConfig& config) {
+  RoomSettings s;
+  s.tick_rate_hz = config.tick_rate_hz;
+  s.member_timeout_s = config.member_timeout_s;
+  s.world.gravity_mps2 = config.gravity_mps2;
+  s.world.floor_height_m = config.floor_height_m;
+  s.world.extent_m = config.world_extent_m;
+  s.world.max_parts = config.max_interaction_datagrams;
+  s.world.spawn_height_m = config.spawn_height_m;
+  return s;
+}
+
 Room::Room(RoomId id, std::string name, const RoomSettings& settings, double now)
     : id_(id),
       name_(std::move(name)),
       settings_(settings),
       tick_interval_(1.0 / settings.tick_rate_hz),
       next_tick_(now + 1.0 / settings.tick_rate_hz),
+      world_(settings.world),
       drops_(fmt::format("room '{}'", name_)) {}
 
 Room::Member* Room::find(std::uint32_t member_id) {
@@ -32,11 +45,15 @@ void Room::apply(const RoomCommand& c, double now) {
       m.key = c.key;
       m.joint_count = c.joint_count;
       m.last_heard = now;
+      m.record_bytes.reserve(
+          static_cast<std::size_t>(wire::postureRecordBytes(wire::kMaxWireJoints)));
       members_.push_back(std::move(m));
+      world_.addMember(c.member, c.seat, c.collision);
       break;
     }
     case RoomCommand::Kind::kRemoveMember:
       std::erase_if(members_, [&](const Member& m) { return m.id == c.member; });
+      world_.removeMember(c.member);
       break;
     case RoomCommand::Kind::kBindEndpoint:
       if (Member* m = find(c.member.value)) {
@@ -46,7 +63,28 @@ void Room::apply(const RoomCommand& c, double now) {
       }
       break;
     case RoomCommand::Kind::kSetAvatar:
-      if (Member* m = find(c.member.value)) m->joint_count = c.joint_count;
+      if (Member* m = find(c.member.value)) {
+        m->joint_count = c.joint_count;
+        m->has_posture = false;
+        world_.setModel(c.member, c.collision);
+      }
+      break;
+    case RoomCommand::Kind::kSpawnProp: {
+      // Above the requesting member's head when there is one, else where the lobby says.
+      glm::vec3 position = c.position;
+      if (c.member.value != 0) {
+        if (auto above = world_.spawnPointAbove(c.member)) position = *above;
+      }
+      if (world_.addProp(c.prop, c.prop_spec, position, c.velocity)) {
+        spdlog::info("room '{}': prop {:#x} spawned at ({:.2f}, {:.2f}, {:.2f})", name_,
+                     c.prop.value, position.x, position.y, position.z);
+      } else {
+        spdlog::warn("room '{}': prop {:#x} could not be spawned", name_, c.prop.value);
+      }
+      break;
+    }
+    case RoomCommand::Kind::kRemoveProp:
+      world_.removeProp(c.prop);
       break;
     case RoomCommand::Kind::kCreate:
     case RoomCommand::Kind::kClose:
@@ -135,6 +173,7 @@ void Room::onPosture(std::span<const std::uint8_t> datagram, const wire::Endpoin
   m->record_bytes.assign(record.begin(), record.end());
   m->sequence = p.record.sequence;
   m->has_posture = true;
+  world_.setPosture(m->id, p.record);
   ++postures_accepted_;
 }
 
@@ -171,42 +210,67 @@ void Room::update(double now, Effects& fx) {
     }
   }
 
-  // Tick: one snapshot round when due; missed ticks are skipped.
+  // Tick: step the world and send one snapshot round when due; missed ticks are skipped.
   if (now < next_tick_) return;
   ++tick_;
+  world_.step(last_tick_time_ < 0.0 ? tick_interval_ : now - last_tick_time_);
+  last_tick_time_ = now;
   sendSnapshots(now, fx);
   next_tick_ += tick_interval_;
   if (next_tick_ <= now) next_tick_ = now + tick_interval_;
 }
 
 void Room::sendSnapshots(double now, Effects& fx) {
+  const auto parts = world_.parts();
   wire::SnapshotHeader header;
   header.tick = tick_;
   header.server_time = now;
   for (const Member& to : members_) {
     if (!to.bound) continue;
-    // Pack the other members' records into as few datagrams as fit.
-    std::vector<std::uint8_t>* packet = nullptr;
-    int count = 0;
-    for (const Member& from : members_) {
-      if (from.id == to.id || !from.has_posture) continue;
-      const std::size_t entry = wire::kSnapshotEntryOverhead + from.record_bytes.size();
-      if (packet != nullptr && (packet->size() + entry > wire::kMaxDatagramBytes || count == 255)) {
-        wire::finishSnapshot(static_cast<std::uint8_t>(count), *packet);
-        packet = nullptr;
+    // The other members' records, in room order, packed into as few datagrams as fit:
+    // first beside each world part (the same bytes for everyone), then on their own.
+    std::size_t next = 0;
+    const auto nextEntry = [&]() -> const Member* {
+      while (next < members_.size()) {
+        const Member& from = members_[next];
+        if (!(from.id == to.id) && from.has_posture) return &from;
+        ++next;
       }
-      if (packet == nullptr) {
-        OutDatagram& out = fx.datagrams.emplace_back();
-        out.to = to.endpoint;
-        out.bytes.reserve(wire::kMaxDatagramBytes);
-        wire::beginSnapshot(header, out.bytes);
-        packet = &out.bytes;
-        count = 0;
+      return nullptr;
+    };
+    const auto fill = [&](std::vector<std::uint8_t>& packet, std::size_t reserved) {
+      int count = 0;
+      for (const Member* from = nextEntry(); from != nullptr && count < 255; from = nextEntry()) {
+        const std::size_t entry = wire::kSnapshotEntryOverhead + from->record_bytes.size();
+        if (packet.size() + entry + reserved > wire::kMaxDatagramBytes) break;
+        wire::appendSnapshotEntry(from->id.value, from->record_bytes, packet);
+        ++count;
+        ++next;
       }
-      wire::appendSnapshotEntry(from.id.value, from.record_bytes, *packet);
-      ++count;
+      return count;
+    };
+    for (std::size_t part = 0; part < parts.size(); ++part) {
+      OutDatagram& out = fx.datagrams.emplace_back();
+      out.to = to.endpoint;
+      out.bytes.reserve(wire::kMaxDatagramBytes);
+      header.prop_count = parts[part].prop_count;
+      header.part = static_cast<std::uint8_t>(part);
+      header.part_count = static_cast<std::uint8_t>(parts.size());
+      wire::beginSnapshot(header, out.bytes);
+      const int count = fill(out.bytes, parts[part].bytes.size());
+      wire::appendSnapshotWorld(parts[part].bytes, out.bytes);
+      wire::finishSnapshot(static_cast<std::uint8_t>(count), out.bytes);
     }
-    if (packet != nullptr) wire::finishSnapshot(static_cast<std::uint8_t>(count), *packet);
+    header.prop_count = 0;
+    header.part = 0;
+    header.part_count = 0;
+    while (nextEntry() != nullptr) {
+      OutDatagram& out = fx.datagrams.emplace_back();
+      out.to = to.endpoint;
+      out.bytes.reserve(wire::kMaxDatagramBytes);
+      wire::beginSnapshot(header, out.bytes);
+      wire::finishSnapshot(static_cast<std::uint8_t>(fill(out.bytes, 0)), out.bytes);
+    }
   }
 }
 

@@ -1,8 +1,14 @@
 // A room's share of the session protocol: the UDP side of its members (latest posture,
-// clock pings) and the fixed-rate tick that sends every member a snapshot of the others'
-// newest postures (DESIGN.md §6, proto/SESSION.md §3). Pure: fed (bytes, endpoint, now),
-// it appends to Effects; no sockets, no clocks, no threads (the shell runs each room on
-// its own strand). Membership comes from the lobby as RoomCommands.
+// clock pings), its collision world (RoomWorld: members' primitives, props, Step 1) and
+// the fixed-rate tick that steps the world and sends every member a snapshot of the
+// others' newest postures, the prop states and the interaction list (DESIGN.md §6,
+// proto/SESSION.md §3, proto/WIRE.md §3.6). Pure: fed (bytes, endpoint, now), it appends
+// to Effects; no sockets, no clocks, no threads (the shell runs each room on its own
+// strand). Membership and props come from the lobby as RoomCommands.
+//
+// Cost per tick: the world step (O(primitives) posing, stepBall per prop, Step 1) plus
+// the snapshots; no heap allocation once the room's buffers and the Effects' datagram
+// slots have grown to its size (reuse one Effects across ticks).
 #pragma once
 
 #include <cstdint>
@@ -14,13 +20,19 @@
 #include "common/wire/packets.hpp"
 #include "server/core/drop_log.hpp"
 #include "server/core/effects.hpp"
+#include "server/core/room_world.hpp"
+#include "server/core/server_config.hpp"
 
 namespace vistel::server {
 
 struct RoomSettings {
   double tick_rate_hz = 60.0;
   double member_timeout_s = 10.0;  // silence on UDP (from join, until the first packet)
+  WorldSettings world;
 };
+
+// The room settings a server configuration asks for.
+RoomSettings roomSettings(const ServerConfig& config);
 
 class Room {
  public:
@@ -51,8 +63,12 @@ class Room {
   // replayed. Call at least at the tick rate.
   void update(double now, Effects& fx);
 
-  // Server time of the next due tick.
+  // Server time of the next due tick, and of the last one (-1 before the first).
   double nextTickTime() const { return next_tick_; }
+  double lastTickTime() const { return last_tick_time_; }
+
+  // The collision world as of the last tick.
+  const RoomWorld& world() const { return world_; }
 
  private:
   struct Member {
@@ -83,6 +99,8 @@ class Room {
   RoomSettings settings_;
   double tick_interval_;
   double next_tick_;
+  double last_tick_time_ = -1.0;  // server time of the last tick (-1: none yet)
+  RoomWorld world_;
   std::uint32_t tick_ = 0;
   std::vector<Member> members_;
   DropLog drops_;

@@ -3,6 +3,7 @@
 #include <set>
 #include <sstream>
 
+#include <fmt/format.h>
 #include <toml++/toml.h>
 
 #include "common/base/embedded.hpp"
@@ -16,6 +17,11 @@ class TableReader {
   TableReader(const toml::table& root, std::string_view section, std::string_view source)
       : source_(source), section_(section) {
     if (const toml::node* n = root.get(section)) table_ = n->as_table();
+  }
+  // A table that is not a top-level section (an entry of an array of tables).
+  TableReader(const toml::table* table, std::string section, std::string_view source)
+      : source_(source), owned_section_(std::move(section)), table_(table) {
+    section_ = owned_section_;
   }
 
   template <typename T>
@@ -50,6 +56,67 @@ class TableReader {
     return {};
   }
 
+  // Three numbers [x, y, z], each within [min, max].
+  Status vec3(std::string_view key, glm::vec3& out, double min, double max) {
+    known_.insert(std::string(key));
+    if (table_ == nullptr) return {};
+    const toml::node* n = table_->get(key);
+    if (n == nullptr) return {};
+    const toml::array* a = n->as_array();
+    if (a == nullptr || a->size() != 3) {
+      return fail("{}: [{}] {}: expected an array of three numbers", source_, section_, key);
+    }
+    for (std::size_t i = 0; i < 3; ++i) {
+      double v = 0.0;
+      if (auto x = (*a)[i].value_exact<std::int64_t>()) {
+        v = static_cast<double>(*x);
+      } else if (auto f = (*a)[i].value_exact<double>()) {
+        v = *f;
+      } else {
+        return fail("{}: [{}] {}: expected an array of three numbers", source_, section_, key);
+      }
+      if (!(v >= min && v <= max)) {
+        return fail("{}: [{}] {}[{}] = {}: out of range [{}, {}]", source_, section_, key, i, v,
+                    min, max);
+      }
+      out[static_cast<glm::length_t>(i)] = static_cast<float>(v);
+    }
+    return {};
+  }
+
+  // A stiffness in Pa per metre, or the string "rigid".
+  Status stiffness(std::string_view key, float& out) {
+    if (table_ != nullptr) {
+      if (const toml::node* n = table_->get(key); n != nullptr && n->is_string()) {
+        known_.insert(std::string(key));
+        if (n->value_exact<std::string>() != "rigid") {
+          return fail("{}: [{}] {}: expected a number (Pa/m) or \"rigid\"", source_, section_, key);
+        }
+        out = kRigidStiffness;
+        return {};
+      }
+    }
+    return number(key, out, 1.0, 1e9);
+  }
+
+  // "elastic", "plastic" or "viscoelastic".
+  Status elasticity(std::string_view key, Elasticity& out) {
+    std::string text;
+    if (Status st = string(key, text); !st) return st;
+    if (text.empty()) return {};
+    if (text == "elastic") {
+      out = Elasticity::kElastic;
+    } else if (text == "plastic") {
+      out = Elasticity::kPlastic;
+    } else if (text == "viscoelastic") {
+      out = Elasticity::kViscoelastic;
+    } else {
+      return fail("{}: [{}] {} '{}': expected elastic, plastic or viscoelastic", source_, section_,
+                  key, text);
+    }
+    return {};
+  }
+
   // Fails on a key that no call above asked for.
   Status checkUnknown() const {
     if (table_ == nullptr) return {};
@@ -63,6 +130,7 @@ class TableReader {
 
  private:
   std::string_view source_;
+  std::string owned_section_;
   std::string_view section_;
   const toml::table* table_ = nullptr;
   std::set<std::string> known_;
@@ -73,6 +141,23 @@ class TableReader {
     Status st_ = (expr);          \
     if (!st_) return st_.error(); \
   } while (false)
+
+// A ball's keys (prefix "ball_" in [props], none in [[prop]]), then the whole spec checked.
+Status readBall(TableReader& t, std::string_view prefix, PropSpec& spec, std::string_view source,
+                std::string_view where) {
+  const auto key = [&](std::string_view k) { return std::string(prefix) + std::string(k); };
+  VISTEL_TRY(t.number(key("radius"), spec.ball.radius, 0.01, 2.0));
+  VISTEL_TRY(t.number(key("reach"), spec.ball.reach, 1.05, 4.0));
+  VISTEL_TRY(t.number(key("mass"), spec.mass, 0.001, 1000.0));
+  VISTEL_TRY(t.number(key("restitution"), spec.restitution, 0.0, 1.0));
+  VISTEL_TRY(t.stiffness(key("stiffness"), spec.ball.stiffness));
+  VISTEL_TRY(t.elasticity(key("elasticity"), spec.ball.elasticity));
+  VISTEL_TRY(t.number(key("time_constant"), spec.ball.time_constant, 0.001, 100.0));
+  if (Status st = validatePropSpec(spec); !st) {
+    return fail("{}: {}: {}", source, where, st.error().message);
+  }
+  return {};
+}
 
 }  // namespace
 
@@ -87,8 +172,9 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
     return fail("{}: {} ({})", source_name, e.description(), where.str());
   }
   for (const auto& [key, node] : root) {
-    static const std::set<std::string, std::less<>> kSections = {"network", "session", "limits",
-                                                                 "room", "log"};
+    static const std::set<std::string, std::less<>> kSections = {
+        "network", "session", "limits", "room", "log", "world", "props"};
+    if (key.str() == "prop" && node.is_array_of_tables()) continue;
     if (!kSections.count(key.str()) || !node.is_table()) {
       return fail("{}: unknown section or key '{}'", source_name, key.str());
     }
@@ -115,6 +201,14 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
   VISTEL_TRY(limits.number("max_avatar_bytes", c.max_avatar_bytes, 1024, 1 << 30));
   // Chunks stay well below the 1 MiB control frames clients accept.
   VISTEL_TRY(limits.number("avatar_chunk_bytes", c.avatar_chunk_bytes, 256, 512 << 10));
+  VISTEL_TRY(
+      limits.number("max_upload_bytes_total", c.max_upload_bytes_total, 1024, 16.0 * (1ull << 30)));
+  VISTEL_TRY(limits.number("upload_stall_timeout_s", c.upload_stall_timeout_s, 0.1, 3600));
+  VISTEL_TRY(limits.number("control_rate_hz", c.control_rate_hz, 0.1, 100000));
+  VISTEL_TRY(limits.number("control_burst", c.control_burst, 1, 1000000));
+  VISTEL_TRY(
+      limits.number("max_primitives_per_avatar", c.max_primitives_per_avatar, 1, kMaxPrimitives));
+  VISTEL_TRY(limits.number("max_primitive_extent_m", c.max_primitive_extent_m, 0.01, 100));
   VISTEL_TRY(limits.checkUnknown());
   if (c.avatar_chunk_bytes + 1024 > c.max_frame_bytes) {
     return fail(
@@ -126,6 +220,43 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
   TableReader room(root, "room", source_name);
   VISTEL_TRY(room.number("seat_radius_m", c.seat_radius_m, 0.1, 100));
   VISTEL_TRY(room.checkUnknown());
+
+  TableReader world(root, "world", source_name);
+  VISTEL_TRY(world.number("gravity_mps2", c.gravity_mps2, 0, 100));
+  VISTEL_TRY(world.number("floor_height_m", c.floor_height_m, -100, 100));
+  VISTEL_TRY(world.number("extent_m", c.world_extent_m, 1, 1000));
+  VISTEL_TRY(world.number("max_interaction_datagrams", c.max_interaction_datagrams, 1, 32));
+  VISTEL_TRY(world.checkUnknown());
+
+  TableReader props(root, "props", source_name);
+  VISTEL_TRY(props.number("max_per_room", c.max_props_per_room, 0, 32));
+  VISTEL_TRY(props.number("spawn_interval_s", c.spawn_interval_s, 0, 3600));
+  VISTEL_TRY(props.number("spawn_height_m", c.spawn_height_m, 0, 10));
+  VISTEL_TRY(readBall(props, "ball_", c.spawn_ball, source_name, "[props] ball"));
+  VISTEL_TRY(props.checkUnknown());
+
+  if (const toml::array* list = root["prop"].as_array()) {
+    for (std::size_t i = 0; i < list->size(); ++i) {
+      const std::string where = fmt::format("prop[{}]", i);
+      TableReader t((*list)[i].as_table(), where, source_name);
+      std::string kind = "ball";
+      VISTEL_TRY(t.string("kind", kind));
+      if (kind != "ball") {
+        return fail("{}: [{}] kind '{}': the only prop kind is \"ball\"", source_name, where, kind);
+      }
+      RoomPropConfig prop;
+      prop.spec = c.spawn_ball;  // [props] ball_* keys are the defaults
+      VISTEL_TRY(t.vec3("position", prop.position, -1000, 1000));
+      VISTEL_TRY(t.vec3("velocity", prop.velocity, -100, 100));
+      VISTEL_TRY(readBall(t, "", prop.spec, source_name, where));
+      VISTEL_TRY(t.checkUnknown());
+      c.room_props.push_back(prop);
+    }
+    if (static_cast<int>(c.room_props.size()) > c.max_props_per_room) {
+      return fail("{}: {} [[prop]] entries but [props] max_per_room is {}", source_name,
+                  c.room_props.size(), c.max_props_per_room);
+    }
+  }
 
   TableReader log(root, "log", source_name);
   VISTEL_TRY(log.string("level", c.log_level));

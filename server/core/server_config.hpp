@@ -1,16 +1,28 @@
 // Settings of the session server, from TOML (config/server.toml, compiled in as the
 // default). Every key is optional; unknown keys and out-of-range values are errors that
 // name the source and the key.
+
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <vector>
+
+#include <glm/glm.hpp>
 
 #include "common/base/result.hpp"
+#include "server/core/props.hpp"
 
 namespace vistel::server {
+
+// A prop every room starts with ([[prop]] entries).
+struct RoomPropConfig {
+  PropSpec spec;
+  glm::vec3 position{0.0f, 1.0f, 0.0f};  // room space, metres
+  glm::vec3 velocity{0.0f};              // m/s
+};
 
 struct ServerConfig {
   // [network]
@@ -25,11 +37,29 @@ struct ServerConfig {
   int max_rooms = 64;
   int max_members = 1024;  // over all rooms (<= 65535)
   int max_members_per_room = 16;
-  std::size_t max_frame_bytes = 256u << 10;    // TCP control frame payload
-  std::size_t max_avatar_bytes = 16u << 20;    // one avatar file
-  std::size_t avatar_chunk_bytes = 64u << 10;  // AvatarChunk.data, both directions (<= 512 KiB)
+  std::size_t max_frame_bytes = 256u << 10;        // TCP control frame payload
+  std::size_t max_avatar_bytes = 16u << 20;        // one avatar file
+  std::size_t avatar_chunk_bytes = 64u << 10;      // AvatarChunk.data, both directions (<= 512 KiB)
+  std::size_t max_upload_bytes_total = 64u << 20;  // unfinished uploads, all connections
+  double upload_stall_timeout_s = 15.0;  // an upload without a chunk for this long is dropped
+  double control_rate_hz = 20.0;         // control messages per second per connection,
+  int control_burst = 100;               // sustained, and in a burst (avatar chunks are free)
+  int max_primitives_per_avatar = 64;    // collision model limits checked at upload
+  float max_primitive_extent_m = 2.0f;   // largest side of a primitive's field box at rest
   // [room]
   float seat_radius_m = 1.5f;  // members stand on a circle of this radius facing its centre
+  // [world]
+  float gravity_mps2 = 9.81f;         // downwards (-Y)
+  float floor_height_m = 0.0f;        // a rigid floor plane at this height
+  float world_extent_m = 20.0f;       // props beyond this (|x|, |z|, height) are reset
+  int max_interaction_datagrams = 4;  // per tick and member; more pairs are truncated
+  // [props]
+  int max_props_per_room = 8;     // a spawn beyond removes the oldest client-spawned prop
+  double spawn_interval_s = 2.0;  // a member spawns at most one prop per this
+  float spawn_height_m = 0.6f;    // a client's ball appears this far above its head joint
+  PropSpec spawn_ball;            // the ball a client's spawn request makes
+  // [[prop]]
+  std::vector<RoomPropConfig> room_props;  // every room starts with these
   // [log]
   std::string log_level = "info";  // trace, debug, info, warn, error
 };

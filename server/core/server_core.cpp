@@ -62,10 +62,7 @@ void ServerCore::settle(double now) {
     for (const RoomCommand& c : commands) {
       router_.apply(c);
       if (c.kind == RoomCommand::Kind::kCreate) {
-        RoomSettings settings;
-        settings.tick_rate_hz = config_.tick_rate_hz;
-        settings.member_timeout_s = config_.member_timeout_s;
-        rooms_[c.room.value] = std::make_unique<Room>(c.room, c.name, settings, now);
+        rooms_[c.room.value] = std::make_unique<Room>(c.room, c.name, roomSettings(config_), now);
       } else if (c.kind == RoomCommand::Kind::kClose) {
         rooms_.erase(c.room.value);
       } else if (auto it = rooms_.find(c.room.value); it != rooms_.end()) {

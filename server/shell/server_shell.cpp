@@ -60,7 +60,8 @@ struct ServerShell::RoomHost {
       : strand(asio::make_strand(io)), timer(strand), room(id, std::move(name), settings, now) {}
   Strand strand;
   asio::steady_timer timer;
-  Room room;  // its strand only
+  Room room;   // its strand only
+  Effects fx;  // its strand only; reused so that ticks allocate nothing once warm
   bool closed = false;
 };
 
@@ -266,10 +267,7 @@ void ServerShell::applyLobbyEffects(Effects& fx) {
       std::lock_guard lock(rooms_mutex_);
       router_.apply(c);
       if (c.kind == RoomCommand::Kind::kCreate) {
-        RoomSettings settings;
-        settings.tick_rate_hz = config_.tick_rate_hz;
-        settings.member_timeout_s = config_.member_timeout_s;
-        host = std::make_shared<RoomHost>(io_, c.room, c.name, settings, now());
+        host = std::make_shared<RoomHost>(io_, c.room, c.name, roomSettings(config_), now());
         rooms_[c.room.value] = host;
         armRoomTimer(host);
         continue;
@@ -302,9 +300,8 @@ void ServerShell::armRoomTimer(std::shared_ptr<RoomHost> host) {
     host->timer.async_wait([this, host](const boost::system::error_code& ec) {
       if (ec || host->closed || stopping_) return;
       guarded("room tick", [&] {
-        Effects fx;
-        host->room.update(now(), fx);
-        applyRoomEffects(fx);
+        host->room.update(now(), host->fx);
+        applyRoomEffects(host->fx);
       });
       armRoomTimer(host);
     });
@@ -327,7 +324,7 @@ void ServerShell::applyRoomEffects(Effects& fx) {
 
 // ---------------------------------------------------------------- UDP
 
-void ServerShell::sendDatagrams(std::vector<OutDatagram>& datagrams) {
+void ServerShell::sendDatagrams(DatagramQueue& datagrams) {
   if (datagrams.empty()) return;
   std::lock_guard lock(udp_mutex_);
   if (!udp_.is_open()) return;
@@ -383,9 +380,8 @@ void ServerShell::onDatagram(std::shared_ptr<std::vector<std::uint8_t>> bytes,
       asio::post(host->strand, [this, host, bytes, from] {
         if (host->closed) return;
         guarded("room datagram", [&] {
-          Effects fx;
-          host->room.onDatagram(*bytes, from, now(), fx);
-          applyRoomEffects(fx);
+          host->room.onDatagram(*bytes, from, now(), host->fx);
+          applyRoomEffects(host->fx);
         });
       });
       break;

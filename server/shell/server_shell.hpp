@@ -58,7 +58,7 @@ class ServerShell {
   // effects on the room's strand (their timeouts are posted to the lobby strand).
   void applyLobbyEffects(Effects& fx);
   void applyRoomEffects(Effects& fx);
-  void sendDatagrams(std::vector<OutDatagram>& datagrams);
+  void sendDatagrams(DatagramQueue& datagrams);
   void armRoomTimer(std::shared_ptr<RoomHost> host);
 
   asio::io_context& io_;

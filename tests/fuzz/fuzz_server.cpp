@@ -14,7 +14,9 @@
 // server writes is a well-formed ServerMessage, every datagram a well-formed server ->
 // client packet of at most kMaxDatagramBytes.
 // Seeds: scripted sessions (join with an avatar upload, a second member reusing the
-// avatar, hellos, postures, pings, requests, leaving) written by the same encoder.
+// avatar, hellos, postures, pings, requests, a ball spawn, leaving) written by the same
+// encoder. The avatar carries an implicit model and the rooms start with a ball, so every
+// tick runs the collision world (posing, stepBall, Step 1, world parts).
 #include <algorithm>
 #include <array>
 #include <cstdint>
@@ -34,6 +36,7 @@
 #include "server/core/server_core.hpp"
 #include "tests/fuzz/fuzz_support.hpp"
 #include "tests/fuzz/tiny_avatar.hpp"
+#include "tests/net/implicit_avatar.hpp"
 
 namespace {
 
@@ -133,8 +136,15 @@ control::ClientMessage joinMessage(const std::string& name, const std::string& h
   return msg;
 }
 
+// The tiny avatar with primitives on its three joints (so members collide).
+AvatarModel collidingAvatar() {
+  AvatarModel a = fuzz::tinyAvatar(3, 2);
+  check(test::addImplicitModel(a, 0.08f, 1.6f), "the seed avatar calibrates");
+  return a;
+}
+
 std::vector<fuzz::Seed> makeSeeds() {
-  const std::vector<std::uint8_t> avatar = encodeAvatar(fuzz::tinyAvatar(3, 2));
+  const std::vector<std::uint8_t> avatar = encodeAvatar(collidingAvatar());
   const std::string hash = avatarContentHash(avatar);
   const int joints = 3;
 
@@ -153,6 +163,9 @@ std::vector<fuzz::Seed> makeSeeds() {
     one.message(0, chunk);
   }
   one.hello(0);
+  control::ClientMessage spawn;
+  spawn.mutable_spawn_prop()->set_kind(control::SpawnProp::BALL);
+  one.message(0, spawn);
   one.posture(0, joints, 1);
   one.advance(0, 4);
   one.posture(0, joints, 2);
@@ -254,9 +267,8 @@ void drain(server::ServerCore& core, std::array<Peer, kPeers>& peers, double now
         check(wire::read(d.bytes, p), "Pong reads back");
       } else {
         check(*type == wire::PacketType::kSnapshot, "only client-bound datagrams");
-        wire::SnapshotHeader header;
-        std::vector<wire::SnapshotEntry> entries;
-        check(wire::readSnapshot(d.bytes, header, entries), "snapshots read back");
+        static wire::Snapshot snapshot;
+        check(wire::readSnapshot(d.bytes, snapshot), "snapshots read back");
       }
     }
     for (server::ConnId conn : fx.closes) {
@@ -285,6 +297,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   config.avatar_chunk_bytes = 4096;
   config.max_members_per_room = 3;
   config.max_rooms = 2;
+  config.max_props_per_room = 3;
+  config.spawn_interval_s = 0.01;
+  server::RoomPropConfig ball;
+  ball.position = {0.0f, 1.0f, 0.0f};
+  config.room_props.push_back(ball);
   server::ServerCore core(config, 1);
 
   std::array<Peer, kPeers> peers;

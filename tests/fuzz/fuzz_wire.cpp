@@ -88,18 +88,27 @@ std::vector<fuzz::Seed> makeSeeds() {
   addPacket(seeds, "hello_ack.bin", HelloAckPacket{7, 3});
   const std::vector<std::uint8_t> pong = addPacket(seeds, "pong.bin", PongPacket{9, 1.25, 100.5});
 
-  // A snapshot of two members.
-  std::vector<std::uint8_t> snapshot, record;
-  beginSnapshot(SnapshotHeader{77, 100.0, 0}, snapshot);
+  // A snapshot of two members, a prop and a two-part interaction list's first part.
+  std::vector<std::uint8_t> snapshot, record, world;
+  SnapshotHeader snapshot_header{77, 100.0, 0, 1, 0, 2};
+  beginSnapshot(snapshot_header, snapshot);
   writeRecord(sampleRecord(3, 1), record);
   appendSnapshotEntry(7, record, snapshot);
   record.clear();
   writeRecord(sampleRecord(1, 2), record);
   appendSnapshotEntry(8, record, snapshot);
+  const PropStateRecord prop =
+      encodePropState(0x00010000u, {0.0f, 1.2f, 0.5f}, {0.0f, -2.0f, 0.0f});
+  InteractionSection section;
+  section.member_ids = {7, 8};
+  section.prop_ids = {0x00010000u};
+  section.pairs = {{0, 1, 1, 2}, {0, 3, 2, 0}, {1, 5, 1, 9}};
+  writeSnapshotWorld(std::span(&prop, 1), &section, world);
+  appendSnapshotWorld(world, snapshot);
   finishSnapshot(2, snapshot);
-  SnapshotHeader snapshot_header;
-  std::vector<SnapshotEntry> entries;
-  check(readSnapshot(snapshot, snapshot_header, entries) && entries.size() == 2,
+  Snapshot read_back;
+  check(readSnapshot(snapshot, read_back) && read_back.entries.size() == 2 &&
+            read_back.interactions.pairs.size() == 3,
         "the seed snapshot reads back");
   seeds.push_back({"snapshot_2.bin", snapshot});
 
@@ -162,17 +171,31 @@ void checkDatagram(std::span<const std::uint8_t> bytes) {
     checkRecord(posture->record, 100.0);
   }
 
-  SnapshotHeader header;
-  std::vector<SnapshotEntry> entries;
-  if (readSnapshot(bytes, header, entries)) {
+  Snapshot snapshot;
+  if (readSnapshot(bytes, snapshot)) {
+    const SnapshotHeader& header = snapshot.header;
     check(peekPacketType(bytes) == PacketType::kSnapshot, "peekPacketType says snapshot");
-    check(entries.size() == header.entry_count, "entry_count entries");
-    std::size_t total = kSnapshotHeaderBytes;
-    for (const SnapshotEntry& e : entries) {
+    check(snapshot.entries.size() == header.entry_count, "entry_count entries");
+    check(snapshot.props.size() == header.prop_count, "prop_count props");
+    std::size_t total = kSnapshotHeaderBytes + snapshot.props.size() * kPropStateBytes;
+    for (const SnapshotEntry& e : snapshot.entries) {
       total += measure(e);
       checkRecord(e.record, header.server_time);
     }
-    check(total == bytes.size(), "a snapshot's entries cover the datagram");
+    const InteractionSection& x = snapshot.interactions;
+    if (header.part_count > 0) {
+      total += interactionSectionBytes(x.bodyCount(), x.pairs.size());
+      for (const WirePair& p : x.pairs) {
+        check(p.body_a < x.bodyCount() && p.body_b < x.bodyCount(), "body indices in the table");
+      }
+    } else {
+      check(x.bodyCount() == 0 && x.pairs.empty(), "no section without parts");
+    }
+    check(total == bytes.size(), "a snapshot's parts cover the datagram");
+    check(measure(snapshot) == bytes.size(), "measure agrees with the bytes");
+    std::vector<std::uint8_t> again;
+    write(snapshot, again);
+    check(std::ranges::equal(again, bytes), "what reads back writes the same bytes");
   }
 }
 

@@ -14,6 +14,7 @@
 #include "common/anim/posture.hpp"
 #include "common/avatar/avatar_io.hpp"
 #include "common/avatar/avatar_model.hpp"
+#include "tests/net/implicit_avatar.hpp"
 
 namespace vistel::test {
 
@@ -52,6 +53,15 @@ inline AvatarModel makeSyntheticAvatar(const std::string& name = "synthetic", fl
       for (std::uint32_t v : f) m.indices.push_back(base + v);
     }
   }
+  return a;
+}
+
+// The synthetic avatar with an implicit model (tests/net/implicit_avatar.hpp): a
+// sphylinder hips->spine, spine->head, spheres on the head and both arm joints, the head
+// and arms colliding with each other and with the hips' primitive.
+inline AvatarModel makeCollidingAvatar(const std::string& name = "colliding") {
+  AvatarModel a = makeSyntheticAvatar(name);
+  addImplicitModel(a);
   return a;
 }
 

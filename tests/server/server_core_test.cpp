@@ -187,7 +187,7 @@ TEST_F(ServerCoreTest, BadJoinsAreRefusedWithAReason) {
 TEST_F(ServerCoreTest, InvalidUploadsAreRejected) {
   // Offer a hash, then upload bytes that hash to something else.
   control::ClientMessage join;
-  join.mutable_join()->set_protocol_version(1);
+  join.mutable_join()->set_protocol_version(kProtocolVersion);
   join.mutable_join()->set_room("lab");
   join.mutable_join()->set_name("mallory");
   join.mutable_join()->set_avatar_hash(std::string(64, 'a'));
@@ -314,7 +314,7 @@ TEST_F(ServerCoreTest, GarbageAndOversizedTcpFramesDropOnlyTheirSender) {
             std::string::npos);
   // A joined member that then sends garbage is dropped (and its room mirror with it).
   control::ClientMessage join_msg;
-  join_msg.mutable_join()->set_protocol_version(1);
+  join_msg.mutable_join()->set_protocol_version(kProtocolVersion);
   join_msg.mutable_join()->set_room("lab");
   join_msg.mutable_join()->set_name("eve");
   join_msg.mutable_join()->set_avatar_hash(avatar_a_.hash);

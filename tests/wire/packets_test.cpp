@@ -44,7 +44,7 @@ TEST(Packets, HelloLayoutMatchesWireMd) {
   h.header.member_id = 0x00010002u;
   h.header.key = 0x1122334455667788ull;
   h.attempt = 3;
-  const std::vector<std::uint8_t> expected = {0x01, 0x01, 0x02, 0x00, 0x01, 0x00, 0x88, 0x77, 0x66,
+  const std::vector<std::uint8_t> expected = {0x02, 0x01, 0x02, 0x00, 0x01, 0x00, 0x88, 0x77, 0x66,
                                               0x55, 0x44, 0x33, 0x22, 0x11, 0x03, 0x00, 0x00, 0x00};
   EXPECT_EQ(bytesOf(h), expected);
   EXPECT_EQ(measure(h), expected.size());
@@ -101,7 +101,7 @@ TEST(Packets, RoundTripsAndPrefixes) {
 TEST(Packets, WrongVersionOrTypeIsRejected) {
   HelloPacket hello;
   auto bytes = bytesOf(hello);
-  bytes[0] = 2;
+  bytes[0] = 1;  // version 1 (before the collision world) is no longer spoken
   HelloPacket out;
   EXPECT_FALSE(read(bytes, out));
   EXPECT_FALSE(peekPacketType(bytes).has_value());
@@ -139,9 +139,10 @@ std::vector<std::uint8_t> makeSnapshot(int members, int joints) {
 
 TEST(Packets, SnapshotRoundTripEqualsSerializedEntries) {
   const auto packet = makeSnapshot(3, 25);
-  SnapshotHeader h;
-  std::vector<SnapshotEntry> entries;
-  ASSERT_TRUE(readSnapshot(packet, h, entries));
+  Snapshot snap;
+  ASSERT_TRUE(readSnapshot(packet, snap));
+  const SnapshotHeader& h = snap.header;
+  const std::vector<SnapshotEntry>& entries = snap.entries;
   EXPECT_EQ(h.tick, 77u);
   EXPECT_EQ(h.server_time, 3.5);
   ASSERT_EQ(entries.size(), 3u);
@@ -155,20 +156,19 @@ TEST(Packets, SnapshotRoundTripEqualsSerializedEntries) {
 
 TEST(Packets, EverySnapshotPrefixIsRejected) {
   const auto packet = makeSnapshot(2, 10);
-  SnapshotHeader h;
-  std::vector<SnapshotEntry> entries;
+  Snapshot snap;
   for (std::size_t n = 0; n < packet.size(); ++n) {
-    EXPECT_FALSE(readSnapshot(std::span(packet.data(), n), h, entries)) << n;
+    EXPECT_FALSE(readSnapshot(std::span(packet.data(), n), snap)) << n;
   }
   auto longer = packet;
   longer.push_back(0);
-  EXPECT_FALSE(readSnapshot(longer, h, entries));
+  EXPECT_FALSE(readSnapshot(longer, snap));
   // A count larger than the entries present, and one the datagram cannot possibly hold.
   auto lying = packet;
   lying[14] = 3;
-  EXPECT_FALSE(readSnapshot(lying, h, entries));
+  EXPECT_FALSE(readSnapshot(lying, snap));
   lying[14] = 255;
-  EXPECT_FALSE(readSnapshot(lying, h, entries));
+  EXPECT_FALSE(readSnapshot(lying, snap));
 }
 
 TEST(Packets, OversizedDatagramsAreRejected) {
@@ -215,9 +215,8 @@ TEST(Packets, GarbageIsRejectedOrReadExactly) {
     (void)read(bytes, ping);
     PongPacket pong;
     (void)read(bytes, pong);
-    SnapshotHeader sh;
-    std::vector<SnapshotEntry> entries;
-    (void)readSnapshot(bytes, sh, entries);
+    Snapshot snap;
+    (void)readSnapshot(bytes, snap);
   }
   EXPECT_GT(accepted, 0);  // mutated rotations are still valid records
 }

@@ -1,0 +1,70 @@
+#include "server/core/collision_model.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <string>
+
+#include "common/anim/posture.hpp"
+
+namespace vistel::server {
+namespace {
+
+std::string lower(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+}  // namespace
+
+int findHeadJoint(const Skeleton& skeleton) {
+  const int n = skeleton.jointCount();
+  for (int j = 0; j < n; ++j) {
+    if (lower(skeleton.names[static_cast<std::size_t>(j)]) == "head") return j;
+  }
+  for (int j = 0; j < n; ++j) {
+    if (lower(skeleton.names[static_cast<std::size_t>(j)]).find("head") != std::string::npos) {
+      return j;
+    }
+  }
+  // The highest joint at rest.
+  const auto rest = restModelTransforms(skeleton);
+  int best = 0;
+  for (int j = 1; j < n; ++j) {
+    if (rest[static_cast<std::size_t>(j)][3].y > rest[static_cast<std::size_t>(best)][3].y)
+      best = j;
+  }
+  return best;
+}
+
+Result<std::shared_ptr<const CollisionModel>> makeCollisionModel(AvatarModel&& avatar,
+                                                                 const CollisionLimits& limits,
+                                                                 std::string_view source) {
+  auto model = std::make_shared<CollisionModel>();
+  model->skeleton = std::move(avatar.skeleton);
+  model->head_joint = findHeadJoint(model->skeleton);
+  if (!avatar.implicit) return std::shared_ptr<const CollisionModel>(std::move(model));
+
+  // The primitives must stay within the server's limits (the decoder has validated them).
+  const PrimitiveSet& set = avatar.implicit->primitives;
+  if (static_cast<int>(set.items.size()) > limits.max_primitives) {
+    return fail("{}: {} primitives in the implicit model (this server accepts at most {})", source,
+                set.items.size(), limits.max_primitives);
+  }
+  for (std::size_t i = 0; i < set.items.size(); ++i) {
+    const Primitive& p = set.items[i];
+    const Bounds box = shapeBounds(p.shape, p.r_out);
+    const glm::vec3 size = box.max - box.min;
+    const float extent = std::max({size.x, size.y, size.z});
+    if (!(extent <= limits.max_extent_m)) {
+      return fail("{}: primitive {} '{}' spans {:.2f} m (this server accepts at most {:.2f} m)",
+                  source, i, p.name, extent, limits.max_extent_m);
+    }
+  }
+  model->collides = true;
+  model->primitives = std::move(avatar.implicit->primitives);
+  model->graph = std::move(avatar.implicit->graph);
+  return std::shared_ptr<const CollisionModel>(std::move(model));
+}
+
+}  // namespace vistel::server
