@@ -1,5 +1,6 @@
-// vistel-bot: headless participants replaying a motion clip (DESIGN.md §6: bots are
-// clients with no window whose source is a recording or a mocap clip).
+// vistel-bot: headless participants replaying a motion clip or a sensor recording
+// (DESIGN.md §6: bots are clients with no window whose source is a recording or a mocap
+// clip).
 //
 //   vistel-bot --server HOST:PORT --room R --name N (--bvh FILE | --recording FILE)
 //              [--avatar FILE] [--loop] [--duration S] [--count K] [--config FILE]
@@ -7,13 +8,17 @@
 // K participants (named N-1 .. N-K when K > 1, else N) join room R, each with the avatar
 // (default: default.vavatar in the data folder), and stream the clip retargeted onto
 // that avatar at the clip's own frame rate (at most the room's tick rate: faster would
-// only be dropped by the server's newest-wins). Ends at the clip's end (without
-// --loop), after --duration seconds, or on SIGINT/SIGTERM, leaving the room cleanly.
+// only be dropped by the server's newest-wins). A .vrec recording is replayed through the
+// posture solver (client/bot/recording_input.hpp) once for all K participants; a damaged
+// one up to its last good record, saying where it broke. Ends at the clip's or recording's
+// end (without --loop), after --duration seconds, or on SIGINT/SIGTERM, leaving the room
+// cleanly.
 // Never initialises GLFW. Exit status: 0, 1 on an error, 2 on bad usage.
 #include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <thread>
@@ -23,6 +28,7 @@
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
+#include "client/bot/recording_input.hpp"
 #include "client/net/asio.hpp"
 #include "client/net/client_config.hpp"
 #include "client/net/clip_player.hpp"
@@ -70,12 +76,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "vistel-bot: give a source: --bvh FILE or --recording FILE\n");
     return 2;
   }
-  if (rec_opt->count() > 0) {
-    // Sensor recordings (.vrec) need the sensor pipeline (common/sensors), not wired yet.
-    std::fprintf(stderr,
-                 "vistel-bot: --recording %s: replaying .vrec sensor recordings is not supported "
-                 "yet; use --bvh FILE\n",
-                 recording_path.c_str());
+  if (rec_opt->count() > 0 && !std::filesystem::is_regular_file(recording_path)) {
+    std::fprintf(stderr, "vistel-bot: --recording %s: no such file\n", recording_path.c_str());
     return 2;
   }
 
@@ -101,23 +103,44 @@ int main(int argc, char** argv) {
     spdlog::error("{}", avatar.error().message);
     return 1;
   }
-  auto clip = loadBvh(bvh_path);
-  if (!clip) {
-    spdlog::error("{}", clip.error().message);
-    return 1;
-  }
-
-  // One player per participant (players keep scratch state).
+  // The source: a recording solved once for every participant (they replay the same
+  // file), or a clip with one player per participant (players keep scratch state).
+  std::unique_ptr<RecordingReplay> replay;
   std::vector<std::unique_ptr<ClipPlayer>> players;
-  for (int i = 0; i < count; ++i) {
-    auto player = ClipPlayer::create(*clip, avatar->skeleton);
-    if (!player) {
-      spdlog::error("{}", player.error().message);
+  std::string source_line;
+  double clip_rate = 0.0;
+  if (!recording_path.empty()) {
+    auto opened = RecordingReplay::open(recording_path, avatar->skeleton, loop);
+    if (!opened) {
+      spdlog::error("{}", opened.error().message);
       return 1;
     }
-    players.push_back(std::move(*player));
+    replay = std::move(*opened);
+    clip_rate = replay->frameRateHz();
+    source_line = replay->describe();
+    if (!replay->damage().empty()) {
+      std::printf(
+          "vistel-bot: the recording is damaged, replaying up to its last good record: %s\n",
+          replay->damage().c_str());
+    }
+  } else {
+    auto clip = loadBvh(bvh_path);
+    if (!clip) {
+      spdlog::error("{}", clip.error().message);
+      return 1;
+    }
+    for (int i = 0; i < count; ++i) {
+      auto player = ClipPlayer::create(*clip, avatar->skeleton);
+      if (!player) {
+        spdlog::error("{}", player.error().message);
+        return 1;
+      }
+      players.push_back(std::move(*player));
+    }
+    clip_rate = 1.0 / players[0]->frameTime();
+    source_line = fmt::format("{} ({:.1f} s at {:.0f} Hz{})", clip->source, players[0]->duration(),
+                              clip_rate, players[0]->retargeted() ? ", retargeted" : "");
   }
-  const double clip_rate = 1.0 / players[0]->frameTime();
 
   // Participants: one driver each, all on one network thread.
   SessionSettings settings = config->session;
@@ -127,11 +150,8 @@ int main(int argc, char** argv) {
       std::make_shared<const std::vector<std::uint8_t>>(std::move(*avatar_bytes));
   settings.avatar_joint_count = avatar->skeleton.jointCount();
   settings.fetch_avatars = false;  // bots draw nothing
-  std::printf(
-      "vistel-bot: %d participant(s) joining room '%s' on %s, replaying %s (%.1f s at "
-      "%.0f Hz%s)\n",
-      count, room.c_str(), server_text.c_str(), clip->source.c_str(), players[0]->duration(),
-      clip_rate, players[0]->retargeted() ? ", retargeted" : "");
+  std::printf("vistel-bot: %d participant(s) joining room '%s' on %s, replaying %s\n", count,
+              room.c_str(), server_text.c_str(), source_line.c_str());
   std::fflush(stdout);
   asio::io_context io;
   auto work = asio::make_work_guard(io);
@@ -159,7 +179,7 @@ int main(int argc, char** argv) {
   while (!g_stop) {
     const double t = static_cast<double>(frame) * interval;
     if (duration > 0.0 && t >= duration) break;
-    if (!loop && t > players[0]->duration() + 1e-9) break;
+    if (!replay && !loop && t > players[0]->duration() + 1e-9) break;
     std::this_thread::sleep_until(start +
                                   std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                       std::chrono::duration<double>(t)));
@@ -174,12 +194,18 @@ int main(int argc, char** argv) {
       rate_fixed = true;
       spdlog::info("sending {:.1f} postures/s per participant", 1.0 / interval);
     }
+    // A recording: solved once per send for everyone; its end (without --loop) ends the run.
+    if (replay && !replay->advanceTo(t, posture)) {
+      std::printf("vistel-bot: replay finished after %zu frames: %s\n", replay->framesSolved(),
+                  replay->endMessage().c_str());
+      break;
+    }
     // Send; stop when every participant's session has ended.
     int open = 0;
     for (int i = 0; i < count; ++i) {
       if (drivers[static_cast<std::size_t>(i)]->state() == SessionState::kClosed) continue;
       ++open;
-      players[static_cast<std::size_t>(i)]->sample(t, loop, posture);
+      if (!replay) players[static_cast<std::size_t>(i)]->sample(t, loop, posture);
       drivers[static_cast<std::size_t>(i)]->sendPosture(posture);
     }
     if (open == 0) break;

@@ -29,6 +29,8 @@ struct InputEvents {
   float scroll = 0.0f;   // wheel steps (positive = away from the user)
   int toggle_view = 0;   // presses of V
   int cycle_stereo = 0;  // presses of B
+  std::string keys;      // other printable keys pressed, oldest first (GLFW codes: 'A'..'Z',
+                         // '0'..'9', punctuation; at most 32 kept)
 };
 
 class GlContext {

@@ -67,6 +67,9 @@ class GlfwWindow final : public GlContext {
     if (key == GLFW_KEY_ESCAPE) glfwSetWindowShouldClose(window, GLFW_TRUE);
     if (key == GLFW_KEY_V) ++me->input_.toggle_view;
     if (key == GLFW_KEY_B) ++me->input_.cycle_stereo;
+    const bool printable = key >= GLFW_KEY_SPACE && key <= GLFW_KEY_GRAVE_ACCENT;
+    if (printable && key != GLFW_KEY_V && key != GLFW_KEY_B && me->input_.keys.size() < 32)
+      me->input_.keys.push_back(static_cast<char>(key));
   }
 
   GLFWwindow* window_;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <unordered_map>
+#include <utility>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -132,6 +133,7 @@ struct RoomView::Impl final : WorkerPool::Job {
   float yaw = 0.0f;
   float pitch = 0.30f;
   float zoom = 1.0f;
+  std::string keys;  // unclaimed key presses (takeKeyPresses)
 
   void runItem(int index) override;
   void render(std::span<const MemberView> members);
@@ -352,6 +354,7 @@ void RoomView::Impl::applyInput() {
   yaw -= input.drag.x * 0.006f;
   pitch = std::clamp(pitch + input.drag.y * 0.006f, -0.3f, 1.4f);
   zoom = std::clamp(zoom * std::pow(1.1f, input.scroll), 0.25f, 6.0f);
+  if (keys.size() < 64) keys += input.keys;
   if (input.toggle_view % 2 == 1) {
     options.view = options.view == ViewMode::kRoom ? ViewMode::kFirstPerson : ViewMode::kRoom;
   }
@@ -593,6 +596,8 @@ Result<std::unique_ptr<RoomView>> RoomView::create(const ViewOptions& options) {
 bool RoomView::shouldClose() const { return impl_->context->shouldClose(); }
 
 void RoomView::pollEvents() { impl_->context->pollEvents(); }
+
+std::string RoomView::takeKeyPresses() { return std::exchange(impl_->keys, std::string()); }
 
 void RoomView::render(std::span<const MemberView> members) { impl_->render(members); }
 

@@ -115,6 +115,10 @@ class RoomView {
   // Handles window events (resize, mouse orbit/zoom, keys: V view mode, B stereo
   // cycle, Escape). No-op offscreen.
   void pollEvents();
+  // The window's other printable keys pressed since the last call, oldest first, as GLFW
+  // names them ('A'..'Z' upper case, '0'..'9'); seen by render(), so a press shows up
+  // after the next frame. Always empty offscreen.
+  std::string takeKeyPresses();
 
   // Skins and draws one frame of these members (their order does not matter; ids must
   // be unique — a repeated id is drawn once). Members absent from a later call have
