@@ -3,8 +3,15 @@
 //   vistel-client --server HOST:PORT --room R --name N [--avatar FILE] [--source bvh:FILE]
 //                 [--headless] [--duration S] [--screenshot FILE] [--stats-json FILE]
 //                 [--stereo off|side-by-side|anaglyph] [--view room|first-person]
-//                 [--frames DIR [--frames-every N]] [--config FILE]
+//                 [--frames DIR [--frames-every N]] [--config FILE] [--ball] [--rigid-only]
+//                 [--sensors FILE.toml [--calibrate-after S] | --source sim:CLIP.bvh
+//                  | --source recording:FILE.vrec] [--record FILE.vrec]
 //
+// With sensors (client/app/sensor_input.hpp) a sensor thread reads the devices (or the
+// simulated rig, or a recording), solves the own posture and sends it; C in the window
+// calibrates. Every drawn body whose avatar carries an implicit model (the default avatar,
+// built avatars, balls) is deformed after skinning (client/deform RoomDeformer; Step 1 from
+// the server's snapshots when it fits, [deform] in the config; --rigid-only turns it off).
 // Joins room R, streams its own posture (a clip with --source, else the avatar's rest
 // posture), receives everyone's into jitter buffers, and draws the room (RoomView: a
 // window with a display, EGL offscreen without one). --headless draws nothing but
@@ -35,11 +42,15 @@
 #include <CLI/CLI.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "client/app/sensor_input.hpp"
+#include "client/app/server_interactions.hpp"
+#include "client/deform/room_deformer.hpp"
 #include "client/net/asio.hpp"
 #include "client/net/client_config.hpp"
 #include "client/net/clip_player.hpp"
 #include "client/net/data_dir.hpp"
 #include "client/net/net_driver.hpp"
+#include "client/net/prop_models.hpp"
 #include "client/view/room_view.hpp"
 #include "common/avatar/avatar_io.hpp"
 #include "common/base/file.hpp"
@@ -133,6 +144,11 @@ int main(int argc, char** argv) {
   app.add_option("--avatar", avatar_path, "avatar file (.vavatar; default: the data folder's)");
   app.add_option("--source", source_text, "own posture source: bvh:FILE (default: rest posture)");
   app.add_flag("--headless", headless, "no window and no rendering");
+  bool ball = false;  // once live: ask the server for a ball above our head
+  app.add_flag("--ball", ball, "once joined, drop a ball above your head (the server places it)");
+  bool rigid_only = false;
+  app.add_flag("--rigid-only", rigid_only,
+               "draw skinned avatars without the deformable component ([deform] enabled = false)");
   app.add_option("--duration", duration, "leave after this many seconds")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--screenshot", screenshot, "write the last frame as PNG at exit");
@@ -145,6 +161,8 @@ int main(int argc, char** argv) {
   app.add_option("--frames-every", frames_every, "with --frames: write every Nth frame")
       ->check(CLI::Range(1, 100000));
   app.add_option("--config", config_path, "client settings (TOML); built-in defaults if absent");
+  SensorArgs sensor_args;
+  addSensorOptions(app, sensor_args);
   CLI11_PARSE(app, argc, argv);
   spdlog::set_default_logger(spdlog::stderr_color_mt("vistel-client"));
 
@@ -155,6 +173,11 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (!screenshot.empty() && duration == 0.0) duration = 3.0;
+  const Result<std::string> sensor_spec = sensorSpec(sensor_args, source_text);
+  if (!sensor_spec) {
+    std::fprintf(stderr, "vistel-client: %s\n", sensor_spec.error().message.c_str());
+    return 2;
+  }
 
   // Settings, address, own avatar.
   auto config = loadClientConfig(config_path);
@@ -182,13 +205,26 @@ int main(int argc, char** argv) {
   }
   const Skeleton& own_skeleton = (*own_avatar)->skeleton;
 
-  // Own posture source.
+  // Own posture from sensors (solved on the sensor thread), else from a clip or at rest.
+  std::unique_ptr<SensorInput> sensors;
+  if (!sensor_spec->empty()) {
+    auto opened = SensorInput::open({.spec = *sensor_spec,
+                                     .calibrate_after_s = sensor_args.calibrate_after_s,
+                                     .record_path = sensor_args.record_path,
+                                     .idle_rate_hz = config->idle_rate_hz},
+                                    own_skeleton);
+    if (!opened) {
+      spdlog::error("{}", opened.error().message);
+      return 1;
+    }
+    sensors = std::move(*opened);
+  }
   std::unique_ptr<ClipPlayer> player;
-  if (!source_text.empty()) {
+  if (!source_text.empty() && !sensors) {
     if (source_text.rfind("bvh:", 0) != 0) {
       std::fprintf(stderr,
-                   "vistel-client: --source %s: expected bvh:FILE (sensor sources are "
-                   "not supported yet)\n",
+                   "vistel-client: --source %s: expected bvh:FILE, sim:CLIP.bvh or "
+                   "recording:FILE.vrec\n",
                    source_text.c_str());
       return 2;
     }
@@ -249,7 +285,13 @@ int main(int argc, char** argv) {
   driver->start();
   std::thread network([&io] { io.run(); });
   std::atomic<bool> stop_source{false};
-  std::thread source_thread([&] { source.run(*driver, stop_source); });
+  std::thread source_thread([&] {
+    if (sensors) {
+      sensors->run(*driver, stop_source);
+    } else {
+      source.run(*driver, stop_source);
+    }
+  });
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
   std::printf("vistel-client: joining room '%s' on %s as '%s'\n", room.c_str(), server_text.c_str(),
@@ -260,7 +302,15 @@ int main(int argc, char** argv) {
   const double frame_interval = 1.0 / config->frame_rate_hz;
   const auto start = Clock::now();
   std::vector<FrameMember> members;
+  std::vector<std::pair<std::uint32_t, BallSpec>> props;  // (prop id, ball), sampled below
+  std::vector<PropSample> prop_states;
+  PropModels prop_models;
   std::vector<MemberView> views;
+  // The deformable component on every drawn body with an implicit model (client/deform).
+  std::unique_ptr<RoomDeformer> deformer;
+  if (view && config->deform && !rigid_only) deformer = std::make_unique<RoomDeformer>();
+  ServerInteractions server_lists;
+  InteractionList received_list;
   std::unordered_map<std::string, std::shared_ptr<const AvatarModel>> models;
   models[own_hash] = *own_avatar;
   std::int64_t frame = 0;
@@ -268,6 +318,7 @@ int main(int argc, char** argv) {
   while (!g_stop) {
     const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
     if (duration > 0.0 && elapsed >= duration) break;
+    if (ball && driver->state() == SessionState::kLive) ball = !driver->requestBall();
     if (driver->state() == SessionState::kClosed) {
       std::fprintf(stderr, "vistel-client: session ended: %s\n", driver->error().c_str());
       exit_code = 1;
@@ -287,12 +338,20 @@ int main(int argc, char** argv) {
         f.is_self = m.is_self;
         f.has_posture = !m.is_self && m.buffer.sample(play_time, f.posture);
       }
+      props.clear();
+      prop_states.resize(s.props().size());
+      for (const auto& p : s.props()) {
+        if (p->track.sample(play_time, prop_states[props.size()])) {
+          props.emplace_back(p->id, p->ball);
+        }
+      }
       return 0;
     });
     // Draw (the view skins every avatar in its worker pool).
     if (view) {
       view->pollEvents();
       if (view->shouldClose()) break;
+      if (sensors) sensors->onKeys(view->takeKeyPresses());
       views.resize(members.size());
       for (std::size_t i = 0; i < members.size(); ++i) {
         const FrameMember& f = members[i];
@@ -307,7 +366,9 @@ int main(int argc, char** argv) {
         v.avatar = found != models.end() ? found->second : nullptr;
         v.is_self = f.is_self;
         v.placement = seatPlacement(f.seat);
-        if (f.is_self) {
+        if (f.is_self && sensors) {
+          sensors->copyLatest(v.posture);
+        } else if (f.is_self) {
           v.posture = source.latest();
         } else if (f.has_posture) {
           v.posture = f.posture;
@@ -315,7 +376,25 @@ int main(int argc, char** argv) {
           v.posture = restPosture(v.avatar->skeleton);
         }
       }
+      // Props: balls drawn as one-joint avatars at their interpolated centres.
+      for (std::size_t k = 0; k < props.size(); ++k) {
+        MemberView& v = views.emplace_back();
+        v.id = propViewId(props[k].first);
+        v.avatar = prop_models.ball(props[k].second);
+        ballPosture(prop_states[k].position, v.posture);
+      }
+      if (deformer) {
+        if (Status st = deformer->sync(views, *view); !st) spdlog::warn("{}", st.error().message);
+        const bool use_server =
+            config->server_interactions && driver->withSession([&](const ClientSession& s, double) {
+              return server_lists.map(s, *deformer, received_list);
+            });
+        if (Status st = deformer->prepare(elapsed, use_server ? &received_list : nullptr); !st) {
+          spdlog::warn("{}", st.error().message);
+        }
+      }
       view->render(views);
+      if (deformer) deformer->finish();
       if (!frames_dir.empty() && frame % frames_every == 0) {
         const std::string path = fmt::format("{}/frame_{:05d}.png", frames_dir, frame);
         if (Status st = view->saveFrame(path); !st) spdlog::warn("{}", st.error().message);
@@ -359,6 +438,16 @@ int main(int argc, char** argv) {
 
   stop_source = true;
   source_thread.join();
+  if (sensors) std::printf("vistel-client: sensors: %s\n", sensors->summary().c_str());
+  if (deformer) {
+    std::printf(
+        "vistel-client: deformable component on %d bodies (scene rebuilt %d times); Step 1 "
+        "from the server in %llu frames (%llu lists did not fit)\n",
+        deformer->bodyCount(), deformer->rebuilds(),
+        static_cast<unsigned long long>(server_lists.used()),
+        static_cast<unsigned long long>(server_lists.refused()));
+  }
+  std::fflush(stdout);
   driver->stop("client exiting");
   work.reset();
   const auto deadline = Clock::now() + std::chrono::seconds(3);
