@@ -142,7 +142,9 @@ int main(int argc, char** argv) {
   app.add_option("--room", room, "room to join")->required();
   app.add_option("--name", name, "participant name")->required();
   app.add_option("--avatar", avatar_path, "avatar file (.vavatar; default: the data folder's)");
-  app.add_option("--source", source_text, "own posture source: bvh:FILE (default: rest posture)");
+  app.add_option("--source", source_text,
+                 "own posture source: bvh:FILE, sim:CLIP.bvh (simulated sensor rig) or "
+                 "recording:FILE.vrec (default: rest posture)");
   app.add_flag("--headless", headless, "no window and no rendering");
   bool ball = false;  // once live: ask the server for a ball above our head
   app.add_flag("--ball", ball, "once joined, drop a ball above your head (the server places it)");

@@ -29,7 +29,8 @@ void addSensorOptions(CLI::App& app, SensorArgs& args) {
                  "own posture from the trackers and gloves of this sensors config (TOML, e.g. "
                  "config/sensors/fastrak.toml)");
   app.add_option("--calibrate-after", args.calibrate_after_s,
-                 "with --sensors: calibrate this many seconds after start (stand in the "
+                 "with a sensor source (--sensors, --source sim: or recording:): calibrate this "
+                 "many seconds after start (stand in the "
                  "calibration pose); the window's C key calibrates at any time")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--record", args.record_path,

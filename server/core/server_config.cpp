@@ -223,8 +223,8 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
 
   TableReader world(root, "world", source_name);
   VISTEL_TRY(world.number("gravity_mps2", c.gravity_mps2, 0, 100));
-  VISTEL_TRY(world.number("floor_height_m", c.floor_height_m, -100, 100));
-  VISTEL_TRY(world.number("extent_m", c.world_extent_m, 1, 1000));
+  VISTEL_TRY(world.number("floor_height_m", c.floor_height_m, -2, 2));
+  VISTEL_TRY(world.number("extent_m", c.world_extent_m, 1, 30));
   VISTEL_TRY(world.number("max_interaction_datagrams", c.max_interaction_datagrams, 1, 32));
   VISTEL_TRY(world.checkUnknown());
 
@@ -246,8 +246,8 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
       }
       RoomPropConfig prop;
       prop.spec = c.spawn_ball;  // [props] ball_* keys are the defaults
-      VISTEL_TRY(t.vec3("position", prop.position, -1000, 1000));
-      VISTEL_TRY(t.vec3("velocity", prop.velocity, -100, 100));
+      VISTEL_TRY(t.vec3("position", prop.position, -30, 30));
+      VISTEL_TRY(t.vec3("velocity", prop.velocity, -30, 30));
       VISTEL_TRY(readBall(t, "", prop.spec, source_name, where));
       VISTEL_TRY(t.checkUnknown());
       c.room_props.push_back(prop);

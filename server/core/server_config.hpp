@@ -51,7 +51,8 @@ struct ServerConfig {
   // [world]
   float gravity_mps2 = 9.81f;         // downwards (-Y)
   float floor_height_m = 0.0f;        // a rigid floor plane at this height
-  float world_extent_m = 20.0f;       // props beyond this (|x|, |z|, height) are reset
+  float world_extent_m = 20.0f;       // props beyond this (|x|, |z|, height) are reset (<= 30:
+                                      // prop states travel in millimetres, WIRE.md §3.7)
   int max_interaction_datagrams = 4;  // per tick and member; more pairs are truncated
   // [props]
   int max_props_per_room = 8;     // a spawn beyond removes the oldest client-spawned prop

@@ -240,7 +240,7 @@ TEST_F(Loopback, ClientRendersTheRoomOffscreen) {
 }
 
 TEST_F(Loopback, ProgramsRefuseBadUsageWithAClearMessage) {
-  // --recording is not wired yet: the error names the option.
+  // A recording that does not exist: the error names the option.
   Child rec("vistel-bot",
             {"--server", "127.0.0.1:1", "--room", "r", "--name", "n", "--recording", "x.vrec"},
             dir_ + "/rec.log", false);
