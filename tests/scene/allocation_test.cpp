@@ -60,6 +60,7 @@ TEST(DeformSceneAllocation, SplitFrameAllocatesNothingAfterWarmUp) {
     if (!st) ADD_FAILURE() << st.error().message;
     for (int i = 0; i < 2; ++i) {
       const auto k = static_cast<std::size_t>(i);
+      dq.resize(s.skinMatrices(i).size());  // within the capacity reserved above
       skinMesh(s.body(i).avatar->skin, SkinningMethod::kDualQuaternion, s.skinMatrices(i), dq,
                pos[k], nrm[k]);
       s.deformBody(i, pos[k], nrm[k]);
