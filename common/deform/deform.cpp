@@ -27,6 +27,13 @@ constexpr float kDefaultStiffness = 3.0e4f;
 // margin of the collider's support box (a vertex outside the support has its root where
 // the collider contributes nothing unless its own root is this far away).
 constexpr float kCullMargin = 0.01f;
+// A contact root along the projection line farther than this many times the vertex's
+// rigid-pose penetration depth (and than kGrazeMinOffset) is re-solved along the contact
+// surface's normal (see reprojectOnContact), unless the line already meets the surface
+// within acos(kGrazeCos) of that normal.
+constexpr float kGrazeFactor = 2.0f;
+constexpr float kGrazeMinOffset = 1e-3f;
+constexpr float kGrazeCos = 0.95f;
 // Vertex patches: at most this many vertices each, and this many patches per pass A task.
 constexpr std::uint32_t kPatchSize = 32;
 constexpr int kPatchesPerTask = 16;
@@ -507,6 +514,33 @@ RootResult solveVertex(VertexProblem& vp, const glm::vec3& dir, float s_start, f
   return res;
 }
 
+// Re-solves a contact vertex from its rigid position along the outward normal of the
+// contact surface at the root `res` found along `dir`, and keeps the nearer of the two
+// roots (replacing res and dir; returns whether it did). Along the rest normal carried by
+// the skinning, a vertex whose own field is weak where it sits (far outside its
+// primitive's fitted surface, w_v >> 1: the inner elbow of a real avatar, whose crease
+// skin is weighted to the forearm) may meet the common surface w_v D_v = w_v F_i only at a
+// grazing angle, or only deep inside, near both skeletons, centimetres from where it
+// started; the contact normal leads to the nearby part of the same surface.
+bool reprojectOnContact(VertexProblem& vp, float reach, const RootOptions& ropt,
+                        DeformCounters& cnt, bool& iterated, glm::vec3& dir, RootResult& res) {
+  glm::vec3 grad_root;
+  evaluate(vp, vp.p0 + res.s * dir, grad_root);
+  ++cnt.evaluations;
+  const float len = glm::length(grad_root);
+  if (!(len > 0.0f)) return false;
+  const glm::vec3 m = -grad_root / len;
+  if (glm::dot(m, dir) >= kGrazeCos) return false;
+  glm::vec3 grad0;
+  const float g0 = evaluate(vp, vp.p0, grad0);
+  ++cnt.evaluations;
+  const RootResult rm = solveVertex(vp, m, 0.0f, g0, grad0, reach, ropt, cnt, iterated);
+  if (!rm.found || !(std::abs(rm.s) < std::abs(res.s))) return false;
+  res = rm;
+  dir = m;
+  return true;
+}
+
 // Pass B: solve every vertex of [first, last).
 void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
   DeformState& st = *fr.st;
@@ -568,6 +602,14 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
     if (!res.found && (flags & kVertexGradient) == 0 && gn > 0.0f) {
       use_gradient();
       res = solveVertex(vp, dir, s_start, g, grad, reach, opt.root, cnt, iterated);
+    }
+    // A contact root far beyond the rigid penetration: try the contact surface's normal.
+    if (res.found && vp.ncand > 0 && st.depth[vi] > 0.0f &&
+        std::abs(res.s) > std::max(kGrazeMinOffset, kGrazeFactor * st.depth[vi]) &&
+        reprojectOnContact(vp, reach, opt.root, cnt, iterated, dir, res) &&
+        (flags & kVertexGradient) == 0) {
+      flags |= kVertexGradient;
+      ++cnt.gradient_vertices;
     }
     if (iterated) ++cnt.iterating_vertices;
 

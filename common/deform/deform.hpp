@@ -1,7 +1,9 @@
 // Steps 2 and 3 of the deformable component (DESIGN.md §3), run per body per frame after
 // the rigid component (skinning):
 //   Step 2: every skin vertex moves from its rigidly posed position P along its rigidly
-//     posed normal n (or along -grad F where they disagree) to P' on F = T, where
+//     posed normal n (or along -grad F where they disagree, or along the contact surface's
+//     normal where the root along n lies far beyond the vertex's penetration) to P' on
+//     F = T, where
 //       F(P) = w_v D_v(P) + sum_i COLL_i,v(P)
 //     over the primitives i that Step 1 found touching v's primitives (other bodies, or
 //     non-blending parts of the same body); Gascuel 1993 "An implicit formulation for
