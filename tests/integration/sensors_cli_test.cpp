@@ -8,8 +8,6 @@
 #include <poll.h>
 #include <pty.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -31,108 +29,15 @@
 
 #include "client/net/data_dir.hpp"
 #include "common/base/file.hpp"
+#include "tests/integration/program.hpp"
 #include "tests/support/test_support.hpp"
-
-extern char** environ;
 
 namespace vistel {
 namespace {
 
+using test::Program;
+
 using Clock = std::chrono::steady_clock;
-
-// A program of the build folder running with its stdout and stderr in a log file (or its
-// stdout in a pipe, for the server's address).
-class Program {
- public:
-  Program(const std::string& program, const std::vector<std::string>& args, std::string log_path,
-          bool pipe_stdout = false)
-      : log_path_(std::move(log_path)) {
-    std::vector<std::string> argv_strings = {test::binaryDir() + "/" + program};
-    argv_strings.insert(argv_strings.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (auto& s : argv_strings) argv.push_back(s.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    int fds[2] = {-1, -1};
-    if (pipe_stdout) {
-      EXPECT_EQ(pipe(fds), 0);
-      posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
-      posix_spawn_file_actions_addclose(&actions, fds[0]);
-      posix_spawn_file_actions_addopen(&actions, 2, log_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                       0644);
-    } else {
-      posix_spawn_file_actions_addopen(&actions, 1, log_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                       0644);
-      posix_spawn_file_actions_adddup2(&actions, 1, 2);
-    }
-    const int rc = posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    EXPECT_EQ(rc, 0) << "cannot start " << argv[0];
-    if (pipe_stdout) {
-      close(fds[1]);
-      out_fd_ = fds[0];
-    }
-  }
-  ~Program() {
-    if (pid_ > 0 && !exited_) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-    }
-    if (out_fd_ >= 0) close(out_fd_);
-  }
-
-  // The next line of piped stdout, waiting at most timeout_s.
-  std::optional<std::string> readLine(double timeout_s) {
-    const auto deadline = Clock::now() + std::chrono::duration<double>(timeout_s);
-    std::string line;
-    while (Clock::now() < deadline) {
-      pollfd p{out_fd_, POLLIN, 0};
-      if (poll(&p, 1, 50) <= 0) continue;
-      char c = 0;
-      if (read(out_fd_, &c, 1) != 1) return std::nullopt;
-      if (c == '\n') return line;
-      line += c;
-    }
-    return std::nullopt;
-  }
-
-  void signal(int sig) { kill(pid_, sig); }
-
-  // Exit status (or -signal), waiting at most timeout_s; nullopt on timeout.
-  std::optional<int> wait(double timeout_s) {
-    const auto deadline = Clock::now() + std::chrono::duration<double>(timeout_s);
-    while (Clock::now() < deadline) {
-      int status = 0;
-      if (waitpid(pid_, &status, WNOHANG) == pid_) {
-        exited_ = true;
-        return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    return std::nullopt;
-  }
-
-  std::string log() const {
-    auto text = readFileText(log_path_);
-    return text ? *text : std::string("(no log)");
-  }
-  // Waits until the log contains `text` (at most timeout_s).
-  bool waitForLog(const std::string& text, double timeout_s) const {
-    const auto deadline = Clock::now() + std::chrono::duration<double>(timeout_s);
-    while (Clock::now() < deadline) {
-      if (log().find(text) != std::string::npos) return true;
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
-    return false;
-  }
-
- private:
-  std::string log_path_;
-  pid_t pid_ = -1;
-  int out_fd_ = -1;
-  bool exited_ = false;
-};
 
 // A FASTRAK-class tracker on a pseudo-terminal: answers the status request, streams binary
 // records (position in inches, quaternion w x y z, a space: output list 2,11,0) for
@@ -289,14 +194,6 @@ class SensorsCli : public ::testing::Test {
   }
   bool haveClip() const { return std::filesystem::exists(clip_); }
 
-  // Starts the server on an ephemeral loopback port; "127.0.0.1:PORT".
-  std::string startServer(Program& server) {
-    const auto line = server.readLine(20.0);
-    const std::string prefix = "vistel-server listening on ";
-    EXPECT_TRUE(line && line->rfind(prefix, 0) == 0) << line.value_or("(nothing)");
-    return line ? line->substr(std::min(prefix.size(), line->size())) : std::string();
-  }
-
   std::vector<std::string> clientArgs(const std::string& address, const std::string& name) {
     return {"--server", address,    "--room", "sensors",   "--name",
             name,       "--avatar", avatar_,  "--headless"};
@@ -324,7 +221,7 @@ class SensorsCli : public ::testing::Test {
 TEST_F(SensorsCli, SimulatedRigRecordedByAClientAndReplayedByBots) {
   if (!haveClip()) GTEST_SKIP() << "no gesture clip (bundled or shared): " << clip_;
   Program server("vistel-server", {"--port", "0"}, dir_ + "/server.log", true);
-  const std::string address = startServer(server);
+  const std::string address = test::serverAddress(server);
   ASSERT_FALSE(address.empty()) << server.log();
   auto observer_args = clientArgs(address, "observer");
   append(observer_args, {"--duration", "6", "--stats-json", dir_ + "/observer.json"});
@@ -359,7 +256,7 @@ TEST_F(SensorsCli, SimulatedRigRecordedByAClientAndReplayedByBots) {
 TEST_F(SensorsCli, TruncatedRecordingReplaysUpToTheLastGoodRecord) {
   if (!haveClip()) GTEST_SKIP() << "no gesture clip (bundled or shared): " << clip_;
   Program server("vistel-server", {"--port", "0"}, dir_ + "/server.log", true);
-  const std::string address = startServer(server);
+  const std::string address = test::serverAddress(server);
   ASSERT_FALSE(address.empty()) << server.log();
   const std::string recording = dir_ + "/take.vrec";
   recordSim(address, recording, "1.5");
@@ -394,7 +291,7 @@ TEST_F(SensorsCli, EmulatedFastrakDrivesTheClientAndItsUnpluggingIsReported) {
   ASSERT_TRUE(writeFileText(config, ptyConfig(tracker.path())));
 
   Program server("vistel-server", {"--port", "0"}, dir_ + "/server.log", true);
-  const std::string address = startServer(server);
+  const std::string address = test::serverAddress(server);
   ASSERT_FALSE(address.empty()) << server.log();
   auto observer_args = clientArgs(address, "observer");
   append(observer_args, {"--duration", "30", "--stats-json", dir_ + "/observer.json"});

@@ -2,14 +2,9 @@
 // an ephemeral port (its printed address parsed), two vistel-bots replaying a clip, and
 // a headless vistel-client whose --stats-json must show both bots at >= 90% of their
 // send rate. Also the programs' failure paths and clean shutdown.
-#include <fcntl.h>
-#include <poll.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -22,104 +17,14 @@
 
 #include "common/avatar/avatar_io.hpp"
 #include "common/base/file.hpp"
+#include "tests/integration/program.hpp"
 #include "tests/net/synthetic_avatar.hpp"
 #include "tests/support/test_support.hpp"
-
-extern char** environ;
 
 namespace vistel {
 namespace {
 
-// A child process with its stdout (and stderr) going to a pipe or a file.
-class Child {
- public:
-  // Starts program (a file in the build folder) with args; output to a pipe the test
-  // reads (capture) or to log_path.
-  Child(const std::string& program, const std::vector<std::string>& args,
-        const std::string& log_path, bool capture_stdout) {
-    std::vector<std::string> argv_strings = {test::binaryDir() + "/" + program};
-    argv_strings.insert(argv_strings.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (auto& s : argv_strings) argv.push_back(s.data());
-    argv.push_back(nullptr);
-
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    int pipe_fds[2] = {-1, -1};
-    if (capture_stdout) {
-      EXPECT_EQ(pipe(pipe_fds), 0);
-      posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], 1);
-      posix_spawn_file_actions_addclose(&actions, pipe_fds[0]);
-      posix_spawn_file_actions_addopen(&actions, 2, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                       0644);
-    } else {
-      posix_spawn_file_actions_addopen(&actions, 1, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                       0644);
-      posix_spawn_file_actions_adddup2(&actions, 1, 2);
-    }
-    const int rc = posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    EXPECT_EQ(rc, 0) << "cannot start " << argv[0];
-    if (capture_stdout) {
-      close(pipe_fds[1]);
-      out_fd_ = pipe_fds[0];
-    }
-  }
-  ~Child() {
-    if (pid_ > 0 && !exited_) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-    }
-    if (out_fd_ >= 0) close(out_fd_);
-  }
-
-  // The next line of captured stdout, waiting at most timeout_s.
-  std::optional<std::string> readLine(double timeout_s) {
-    const auto deadline =
-        std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    std::string line;
-    while (std::chrono::steady_clock::now() < deadline) {
-      pollfd p{out_fd_, POLLIN, 0};
-      if (poll(&p, 1, 50) <= 0) continue;
-      char c = 0;
-      if (read(out_fd_, &c, 1) != 1) return std::nullopt;
-      if (c == '\n') return line;
-      line += c;
-    }
-    return std::nullopt;
-  }
-
-  void signal(int sig) { kill(pid_, sig); }
-
-  // Exit status (or -signal), waiting at most timeout_s; nullopt on timeout.
-  std::optional<int> wait(double timeout_s) {
-    const auto deadline =
-        std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    while (std::chrono::steady_clock::now() < deadline) {
-      int status = 0;
-      if (waitpid(pid_, &status, WNOHANG) == pid_) {
-        exited_ = true;
-        return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    return std::nullopt;
-  }
-
- private:
-  pid_t pid_ = -1;
-  int out_fd_ = -1;
-  bool exited_ = false;
-};
-
-// Starts a server on an ephemeral loopback port; returns "127.0.0.1:PORT".
-std::string startServer(Child& server) {
-  const auto line = server.readLine(20.0);
-  EXPECT_TRUE(line.has_value()) << "vistel-server printed no address";
-  const std::string prefix = "vistel-server listening on ";
-  EXPECT_EQ(line.value_or("").rfind(prefix, 0), 0u) << line.value_or("");
-  return line.value_or("").substr(prefix.size());
-}
+using Child = test::Program;
 
 std::string logOf(const std::string& path) {
   auto text = readFileText(path);
@@ -144,7 +49,7 @@ class Loopback : public ::testing::Test {
 
 TEST_F(Loopback, ServerTwoBotsAndAHeadlessClient) {
   Child server("vistel-server", {"--port", "0"}, dir_ + "/server.log", true);
-  const std::string address = startServer(server);
+  const std::string address = test::serverAddress(server);
   ASSERT_FALSE(address.empty());
 
   Child wave("vistel-bot",
@@ -193,7 +98,7 @@ TEST_F(Loopback, ServerTwoBotsAndAHeadlessClient) {
 
 TEST_F(Loopback, ServerStopsOnSigintWithClientsConnected) {
   Child server("vistel-server", {"--port", "0"}, dir_ + "/server.log", true);
-  const std::string address = startServer(server);
+  const std::string address = test::serverAddress(server);
   Child bot("vistel-bot",
             {"--server", address, "--room", "it", "--name", "b", "--bvh", bvh_path_, "--avatar",
              avatar_path_, "--loop", "--count", "3"},
@@ -210,7 +115,7 @@ TEST_F(Loopback, ServerStopsOnSigintWithClientsConnected) {
 
 TEST_F(Loopback, ClientRendersTheRoomOffscreen) {
   Child server("vistel-server", {"--port", "0"}, dir_ + "/server.log", true);
-  const std::string address = startServer(server);
+  const std::string address = test::serverAddress(server);
   Child bot("vistel-bot",
             {"--server", address, "--room", "it", "--name", "wave", "--bvh", bvh_path_, "--avatar",
              avatar_path_, "--loop"},
@@ -260,7 +165,7 @@ TEST_F(Loopback, ProgramsRefuseBadUsageWithAClearMessage) {
       << logOf(dir_ + "/client.log");
   // A server port already taken by another server.
   Child first("vistel-server", {"--port", "0"}, dir_ + "/first.log", true);
-  const std::string address = startServer(first);
+  const std::string address = test::serverAddress(first);
   const std::string port = address.substr(address.rfind(':') + 1);
   Child second("vistel-server", {"--port", port}, dir_ + "/second.log", false);
   EXPECT_EQ(second.wait(10.0).value_or(-999), 1);

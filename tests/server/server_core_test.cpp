@@ -12,6 +12,7 @@
 #include "server/core/server_core.hpp"
 #include "tests/net/sim_network.hpp"
 #include "tests/net/synthetic_avatar.hpp"
+#include "tests/server/control_frames.hpp"
 
 namespace vistel::server {
 namespace {
@@ -29,26 +30,8 @@ ServerConfig testConfig() {
   return c;
 }
 
-std::vector<std::uint8_t> frameOf(const control::ClientMessage& msg) {
-  const std::string payload = msg.SerializeAsString();
-  std::vector<std::uint8_t> out;
-  wire::appendFrame(
-      std::span(reinterpret_cast<const std::uint8_t*>(payload.data()), payload.size()), out);
-  return out;
-}
-
-// The ServerMessages in a raw connection's received bytes.
-std::vector<control::ServerMessage> messagesOf(const std::vector<std::uint8_t>& bytes) {
-  wire::FrameDecoder d(1u << 20);
-  EXPECT_TRUE(d.push(bytes));
-  std::vector<control::ServerMessage> out;
-  while (auto f = d.next()) {
-    control::ServerMessage m;
-    EXPECT_TRUE(m.ParseFromArray(f->data(), static_cast<int>(f->size())));
-    out.push_back(m);
-  }
-  return out;
-}
+using test::frameOf;
+using test::messagesOf;
 
 class ServerCoreTest : public ::testing::Test {
  protected:
