@@ -382,6 +382,7 @@ int main(int argc, char** argv) {
       for (std::size_t k = 0; k < props.size(); ++k) {
         MemberView& v = views.emplace_back();
         v.id = propViewId(props[k].first);
+        view->setFramed(v.id, false);
         v.avatar = prop_models.ball(props[k].second);
         ballPosture(prop_states[k].position, v.posture);
       }

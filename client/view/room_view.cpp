@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -123,6 +124,7 @@ struct RoomView::Impl final : WorkerPool::Job {
   std::string warning;
   std::unordered_map<std::uint32_t, std::shared_ptr<PostSkinDeformer>> deformers;
   std::unordered_map<std::uint32_t, int> head_joints;
+  std::unordered_set<std::uint32_t> unframed;  // setFramed(id, false)
   bool joint_maps_loaded = false;
   std::vector<JointMap> joint_maps;  // config/skeletons, loaded at the first new avatar
   int frames = 0;
@@ -373,12 +375,17 @@ void RoomView::Impl::computeCameras(glm::ivec2 size) {
       static_cast<float>(std::max(eye_width, 1)) / static_cast<float>(std::max(size.y, 1));
   const float fov = glm::radians(std::clamp(options.vertical_fov_deg, 10.0f, 150.0f));
 
-  // Everyone's bounds, and the self member.
+  // Everyone's bounds (members taken out of the framing count only when nobody else is
+  // drawn), and the self member.
   glm::vec3 lo(std::numeric_limits<float>::max());
   glm::vec3 hi(std::numeric_limits<float>::lowest());
   const MemberSlot* self = nullptr;
+  const bool any_framed = std::any_of(slots.begin(), slots.end(), [&](const auto& slot) {
+    return slot->has_front && !unframed.count(slot->id);
+  });
   for (const auto& slot : slots) {
     if (!slot->has_front) continue;
+    if (any_framed && unframed.count(slot->id)) continue;
     lo = glm::min(lo, slot->shown().box_min);
     hi = glm::max(hi, slot->shown().box_max);
     // Leave room for the marker and the name tag above the head.
@@ -641,6 +648,14 @@ void RoomView::setDeformer(std::uint32_t member_id, std::shared_ptr<PostSkinDefo
 
 void RoomView::setHeadJoint(std::uint32_t member_id, int joint) {
   impl_->head_joints[member_id] = joint;
+}
+
+void RoomView::setFramed(std::uint32_t member_id, bool framed) {
+  if (framed) {
+    impl_->unframed.erase(member_id);
+  } else if (!impl_->unframed.count(member_id)) {
+    impl_->unframed.insert(member_id);  // allocates once per member, not per frame
+  }
 }
 
 void RoomView::setStereo(StereoMode stereo) { impl_->options.stereo = stereo; }

@@ -62,7 +62,7 @@ class PostSkinDeformer {
 
 // One member as the view draws it. Exactly these six fields, so that positional
 // aggregate initialisation stays warning-free (-Wmissing-field-initializers); per-member
-// extras are set on the view (setDeformer, setHeadJoint).
+// extras are set on the view (setDeformer, setHeadJoint, setFramed).
 struct MemberView {
   std::uint32_t id = 0;                       // stable member id (caches are keyed by it)
   std::string name;                           // drawn in the name tag (empty: no tag)
@@ -143,6 +143,10 @@ class RoomView {
   // skeleton, else a joint named "head" in any case, else a name containing "head", else
   // the topmost joint at rest. Out-of-range indices fall back to the search.
   void setHeadJoint(std::uint32_t member_id, int joint);
+  // Whether the room camera keeps this member in the picture (default: yes). Props are
+  // drawn but not framed, so a ball that bounces away does not zoom the room out; when
+  // nothing framed is drawn, everything is.
+  void setFramed(std::uint32_t member_id, bool framed);
 
   // Changing modes between frames (the window's keys do the same).
   void setStereo(StereoMode stereo);

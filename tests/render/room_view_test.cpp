@@ -405,6 +405,34 @@ TEST(RoomViewRender, RoomCameraKeepsEveryoneInTheFrame) {
   }
 }
 
+// A member taken out of the framing (a prop far away) does not pull the room camera back;
+// drawn alone, it is framed anyway.
+TEST(RoomViewRender, UnframedMembersDoNotWidenTheRoomCamera) {
+  const test::TestAvatar avatar = test::makeTestAvatar();
+  const std::vector<MemberView> members = {member(1, avatar, placeAt(0.0f, 0.0f, 0.0f)),
+                                           member(2, avatar, placeAt(25.0f, 0.0f, 0.0f))};
+  // Distance from the room camera to `target` after a few frames.
+  const auto cameraDistance = [&](bool frame_far, const std::vector<MemberView>& drawn,
+                                  const glm::vec3& target) {
+    auto created = RoomView::create(smallOffscreen(320, 240));
+    if (!created) return -1.0f;
+    if (!frame_far) (*created)->setFramed(2, false);
+    for (int frame = 0; frame < 3; ++frame) (*created)->render(drawn);
+    return glm::distance((*created)->lastCameras()[0].position, target);
+  };
+  VISTEL_MAKE_VIEW(probe, smallOffscreen(32, 32));  // skips without OpenGL
+  const float both = cameraDistance(true, members, glm::vec3(12.5f, 1.0f, 0.0f));
+  const float near_only = cameraDistance(false, members, glm::vec3(0.0f, 1.0f, 0.0f));
+  ASSERT_GT(both, 0.0f);
+  ASSERT_GT(near_only, 0.0f);
+  EXPECT_LT(near_only, 0.5f * both)
+      << "framing both: " << both << " m, the near one: " << near_only;
+  // Alone, the unframed member is framed all the same.
+  const float alone = cameraDistance(false, {members[1]}, glm::vec3(25.0f, 1.0f, 0.0f));
+  EXPECT_GT(alone, 0.0f);
+  EXPECT_LT(alone, 1.5f * near_only);
+}
+
 TEST(RoomViewRender, MembersComeAndGoAndBadInputStaysContained) {
   VISTEL_MAKE_VIEW(view, smallOffscreen(96, 72));
   const test::TestAvatar avatar = test::makeTestAvatar();
