@@ -8,76 +8,9 @@
 #include <toml++/toml.h>
 
 #include "common/base/embedded.hpp"
+#include "common/config/config_table.hpp"
 
 namespace vistel::net {
-namespace {
-
-// Typed, range-checked keys of one table, remembering which keys it knew.
-class TableReader {
- public:
-  TableReader(const toml::table& root, std::string_view section, std::string_view source)
-      : source_(source), section_(section) {
-    if (const toml::node* n = root.get(section)) table_ = n->as_table();
-  }
-
-  template <typename T>
-  Status number(std::string_view key, T& out, double min, double max) {
-    known_.insert(std::string(key));
-    const toml::node* n = table_ != nullptr ? table_->get(key) : nullptr;
-    if (n == nullptr) return {};
-    double v = 0.0;
-    if (auto i = n->value_exact<std::int64_t>()) {
-      v = static_cast<double>(*i);
-    } else if (auto f = n->value_exact<double>()) {
-      v = *f;
-    } else {
-      return fail("{}: [{}] {}: expected a number", source_, section_, key);
-    }
-    if (!(v >= min && v <= max)) {
-      return fail("{}: [{}] {} = {}: out of range [{}, {}]", source_, section_, key, v, min, max);
-    }
-    out = static_cast<T>(v);
-    return {};
-  }
-
-  Status string(std::string_view key, std::string& out) {
-    known_.insert(std::string(key));
-    const toml::node* n = table_ != nullptr ? table_->get(key) : nullptr;
-    if (n == nullptr) return {};
-    auto s = n->value_exact<std::string>();
-    if (!s) return fail("{}: [{}] {}: expected a string", source_, section_, key);
-    out = *s;
-    return {};
-  }
-
-  Status boolean(std::string_view key, bool& out) {
-    known_.insert(std::string(key));
-    const toml::node* n = table_ != nullptr ? table_->get(key) : nullptr;
-    if (n == nullptr) return {};
-    auto b = n->value_exact<bool>();
-    if (!b) return fail("{}: [{}] {}: expected true or false", source_, section_, key);
-    out = *b;
-    return {};
-  }
-
-  Status checkUnknown() const {
-    if (table_ == nullptr) return {};
-    for (const auto& [key, node] : *table_) {
-      if (!known_.count(std::string(key.str()))) {
-        return fail("{}: [{}] unknown key '{}'", source_, section_, key.str());
-      }
-    }
-    return {};
-  }
-
- private:
-  std::string_view source_;
-  std::string_view section_;
-  const toml::table* table_ = nullptr;
-  std::set<std::string> known_;
-};
-
-}  // namespace
 
 #define VISTEL_CONFIG_TRY(expr)   \
   do {                            \
@@ -104,7 +37,7 @@ Result<ClientConfig> parseClientConfig(std::string_view toml_text, std::string_v
 
   ClientConfig c;
   SessionSettings& s = c.session;
-  TableReader network(root, "network", source_name);
+  ConfigTable network(root, "network", source_name);
   VISTEL_CONFIG_TRY(network.number("hello_interval_s", s.hello_interval_s, 0.01, 10));
   VISTEL_CONFIG_TRY(network.number("hello_timeout_s", s.hello_timeout_s, 0.1, 600));
   VISTEL_CONFIG_TRY(network.number("join_timeout_s", s.join_timeout_s, 0.1, 600));
@@ -112,26 +45,26 @@ Result<ClientConfig> parseClientConfig(std::string_view toml_text, std::string_v
   VISTEL_CONFIG_TRY(network.number("server_timeout_s", s.server_timeout_s, 0.5, 3600));
   VISTEL_CONFIG_TRY(network.checkUnknown());
 
-  TableReader playback(root, "playback", source_name);
+  ConfigTable playback(root, "playback", source_name);
   VISTEL_CONFIG_TRY(playback.number("interpolation_delay_s", c.interpolation_delay_s, 0, 5));
   VISTEL_CONFIG_TRY(playback.number("jitter_capacity", s.jitter_capacity, 2, 1024));
   VISTEL_CONFIG_TRY(playback.checkUnknown());
 
-  TableReader source(root, "source", source_name);
+  ConfigTable source(root, "source", source_name);
   VISTEL_CONFIG_TRY(source.number("idle_rate_hz", c.idle_rate_hz, 1, 240));
   VISTEL_CONFIG_TRY(source.checkUnknown());
 
-  TableReader avatars(root, "avatars", source_name);
+  ConfigTable avatars(root, "avatars", source_name);
   VISTEL_CONFIG_TRY(avatars.string("cache_dir", c.cache_dir));
   VISTEL_CONFIG_TRY(avatars.checkUnknown());
 
-  TableReader view(root, "view", source_name);
+  ConfigTable view(root, "view", source_name);
   VISTEL_CONFIG_TRY(view.number("width", c.width, 16, 8192));
   VISTEL_CONFIG_TRY(view.number("height", c.height, 16, 8192));
   VISTEL_CONFIG_TRY(view.number("worker_threads", c.worker_threads, 1, 64));
   VISTEL_CONFIG_TRY(view.number("frame_rate_hz", c.frame_rate_hz, 1, 1000));
   VISTEL_CONFIG_TRY(view.checkUnknown());
-  TableReader deform(root, "deform", source_name);
+  ConfigTable deform(root, "deform", source_name);
   VISTEL_CONFIG_TRY(deform.boolean("enabled", c.deform));
   VISTEL_CONFIG_TRY(deform.boolean("server_interactions", c.server_interactions));
   VISTEL_CONFIG_TRY(deform.checkUnknown());

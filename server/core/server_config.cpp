@@ -7,134 +7,39 @@
 #include <toml++/toml.h>
 
 #include "common/base/embedded.hpp"
+#include "common/config/config_table.hpp"
 
 namespace vistel::server {
 namespace {
 
-// Reads typed, range-checked keys from one TOML table, remembering which keys it knew.
-class TableReader {
- public:
-  TableReader(const toml::table& root, std::string_view section, std::string_view source)
-      : source_(source), section_(section) {
-    if (const toml::node* n = root.get(section)) table_ = n->as_table();
-  }
-  // A table that is not a top-level section (an entry of an array of tables).
-  TableReader(const toml::table* table, std::string section, std::string_view source)
-      : source_(source), owned_section_(std::move(section)), table_(table) {
-    section_ = owned_section_;
-  }
-
-  template <typename T>
-  Status number(std::string_view key, T& out, double min, double max) {
-    known_.insert(std::string(key));
-    if (table_ == nullptr) return {};
-    const toml::node* n = table_->get(key);
-    if (n == nullptr) return {};
-    double v = 0.0;
-    if (auto i = n->value_exact<std::int64_t>()) {
-      v = static_cast<double>(*i);
-    } else if (auto f = n->value_exact<double>()) {
-      v = *f;
-    } else {
-      return fail("{}: [{}] {}: expected a number", source_, section_, key);
+// A stiffness in Pa per metre, or the string "rigid".
+Status readStiffness(ConfigTable& t, std::string_view key, float& out) {
+  if (const toml::node* n = t.node(key); n != nullptr && n->is_string()) {
+    if (n->value_exact<std::string>() != "rigid") {
+      return t.error(key, "expected a number (Pa/m) or \"rigid\"");
     }
-    if (!(v >= min && v <= max)) {
-      return fail("{}: [{}] {} = {}: out of range [{}, {}]", source_, section_, key, v, min, max);
-    }
-    out = static_cast<T>(v);
+    out = kRigidStiffness;
     return {};
   }
+  return t.number(key, out, 1.0, 1e9);
+}
 
-  Status string(std::string_view key, std::string& out) {
-    known_.insert(std::string(key));
-    if (table_ == nullptr) return {};
-    const toml::node* n = table_->get(key);
-    if (n == nullptr) return {};
-    auto s = n->value_exact<std::string>();
-    if (!s) return fail("{}: [{}] {}: expected a string", source_, section_, key);
-    out = *s;
-    return {};
+// "elastic", "plastic" or "viscoelastic".
+Status readElasticity(ConfigTable& t, std::string_view key, Elasticity& out) {
+  std::string text;
+  if (Status st = t.string(key, text); !st) return st;
+  if (text.empty()) return {};
+  if (text == "elastic") {
+    out = Elasticity::kElastic;
+  } else if (text == "plastic") {
+    out = Elasticity::kPlastic;
+  } else if (text == "viscoelastic") {
+    out = Elasticity::kViscoelastic;
+  } else {
+    return t.error(key, fmt::format("'{}': expected elastic, plastic or viscoelastic", text));
   }
-
-  // Three numbers [x, y, z], each within [min, max].
-  Status vec3(std::string_view key, glm::vec3& out, double min, double max) {
-    known_.insert(std::string(key));
-    if (table_ == nullptr) return {};
-    const toml::node* n = table_->get(key);
-    if (n == nullptr) return {};
-    const toml::array* a = n->as_array();
-    if (a == nullptr || a->size() != 3) {
-      return fail("{}: [{}] {}: expected an array of three numbers", source_, section_, key);
-    }
-    for (std::size_t i = 0; i < 3; ++i) {
-      double v = 0.0;
-      if (auto x = (*a)[i].value_exact<std::int64_t>()) {
-        v = static_cast<double>(*x);
-      } else if (auto f = (*a)[i].value_exact<double>()) {
-        v = *f;
-      } else {
-        return fail("{}: [{}] {}: expected an array of three numbers", source_, section_, key);
-      }
-      if (!(v >= min && v <= max)) {
-        return fail("{}: [{}] {}[{}] = {}: out of range [{}, {}]", source_, section_, key, i, v,
-                    min, max);
-      }
-      out[static_cast<glm::length_t>(i)] = static_cast<float>(v);
-    }
-    return {};
-  }
-
-  // A stiffness in Pa per metre, or the string "rigid".
-  Status stiffness(std::string_view key, float& out) {
-    if (table_ != nullptr) {
-      if (const toml::node* n = table_->get(key); n != nullptr && n->is_string()) {
-        known_.insert(std::string(key));
-        if (n->value_exact<std::string>() != "rigid") {
-          return fail("{}: [{}] {}: expected a number (Pa/m) or \"rigid\"", source_, section_, key);
-        }
-        out = kRigidStiffness;
-        return {};
-      }
-    }
-    return number(key, out, 1.0, 1e9);
-  }
-
-  // "elastic", "plastic" or "viscoelastic".
-  Status elasticity(std::string_view key, Elasticity& out) {
-    std::string text;
-    if (Status st = string(key, text); !st) return st;
-    if (text.empty()) return {};
-    if (text == "elastic") {
-      out = Elasticity::kElastic;
-    } else if (text == "plastic") {
-      out = Elasticity::kPlastic;
-    } else if (text == "viscoelastic") {
-      out = Elasticity::kViscoelastic;
-    } else {
-      return fail("{}: [{}] {} '{}': expected elastic, plastic or viscoelastic", source_, section_,
-                  key, text);
-    }
-    return {};
-  }
-
-  // Fails on a key that no call above asked for.
-  Status checkUnknown() const {
-    if (table_ == nullptr) return {};
-    for (const auto& [key, node] : *table_) {
-      if (!known_.count(std::string(key.str()))) {
-        return fail("{}: [{}] unknown key '{}'", source_, section_, key.str());
-      }
-    }
-    return {};
-  }
-
- private:
-  std::string_view source_;
-  std::string owned_section_;
-  std::string_view section_;
-  const toml::table* table_ = nullptr;
-  std::set<std::string> known_;
-};
+  return {};
+}
 
 #define VISTEL_TRY(expr)          \
   do {                            \
@@ -143,15 +48,15 @@ class TableReader {
   } while (false)
 
 // A ball's keys (prefix "ball_" in [props], none in [[prop]]), then the whole spec checked.
-Status readBall(TableReader& t, std::string_view prefix, PropSpec& spec, std::string_view source,
+Status readBall(ConfigTable& t, std::string_view prefix, PropSpec& spec, std::string_view source,
                 std::string_view where) {
   const auto key = [&](std::string_view k) { return std::string(prefix) + std::string(k); };
   VISTEL_TRY(t.number(key("radius"), spec.ball.radius, 0.01, 2.0));
   VISTEL_TRY(t.number(key("reach"), spec.ball.reach, 1.05, 4.0));
   VISTEL_TRY(t.number(key("mass"), spec.mass, 0.001, 1000.0));
   VISTEL_TRY(t.number(key("restitution"), spec.restitution, 0.0, 1.0));
-  VISTEL_TRY(t.stiffness(key("stiffness"), spec.ball.stiffness));
-  VISTEL_TRY(t.elasticity(key("elasticity"), spec.ball.elasticity));
+  VISTEL_TRY(readStiffness(t, key("stiffness"), spec.ball.stiffness));
+  VISTEL_TRY(readElasticity(t, key("elasticity"), spec.ball.elasticity));
   VISTEL_TRY(t.number(key("time_constant"), spec.ball.time_constant, 0.001, 100.0));
   if (Status st = validatePropSpec(spec); !st) {
     return fail("{}: {}: {}", source, where, st.error().message);
@@ -181,19 +86,19 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
   }
 
   ServerConfig c;
-  TableReader network(root, "network", source_name);
+  ConfigTable network(root, "network", source_name);
   VISTEL_TRY(network.string("bind", c.bind_address));
   VISTEL_TRY(network.number("port", c.port, 0, 65535));
   VISTEL_TRY(network.number("io_threads", c.io_threads, 1, 64));
   VISTEL_TRY(network.checkUnknown());
 
-  TableReader session(root, "session", source_name);
+  ConfigTable session(root, "session", source_name);
   VISTEL_TRY(session.number("tick_rate_hz", c.tick_rate_hz, 1, 240));
   VISTEL_TRY(session.number("member_timeout_s", c.member_timeout_s, 0.1, 3600));
   VISTEL_TRY(session.number("join_timeout_s", c.join_timeout_s, 0.1, 3600));
   VISTEL_TRY(session.checkUnknown());
 
-  TableReader limits(root, "limits", source_name);
+  ConfigTable limits(root, "limits", source_name);
   VISTEL_TRY(limits.number("max_rooms", c.max_rooms, 1, 65535));
   VISTEL_TRY(limits.number("max_members", c.max_members, 1, 65535));
   VISTEL_TRY(limits.number("max_members_per_room", c.max_members_per_room, 1, 255));
@@ -217,18 +122,18 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
         source_name, c.avatar_chunk_bytes, c.max_frame_bytes);
   }
 
-  TableReader room(root, "room", source_name);
+  ConfigTable room(root, "room", source_name);
   VISTEL_TRY(room.number("seat_radius_m", c.seat_radius_m, 0.1, 100));
   VISTEL_TRY(room.checkUnknown());
 
-  TableReader world(root, "world", source_name);
+  ConfigTable world(root, "world", source_name);
   VISTEL_TRY(world.number("gravity_mps2", c.gravity_mps2, 0, 100));
   VISTEL_TRY(world.number("floor_height_m", c.floor_height_m, -2, 2));
   VISTEL_TRY(world.number("extent_m", c.world_extent_m, 1, 30));
   VISTEL_TRY(world.number("max_interaction_datagrams", c.max_interaction_datagrams, 1, 32));
   VISTEL_TRY(world.checkUnknown());
 
-  TableReader props(root, "props", source_name);
+  ConfigTable props(root, "props", source_name);
   VISTEL_TRY(props.number("max_per_room", c.max_props_per_room, 0, 32));
   VISTEL_TRY(props.number("spawn_interval_s", c.spawn_interval_s, 0, 3600));
   VISTEL_TRY(props.number("spawn_height_m", c.spawn_height_m, 0, 10));
@@ -238,7 +143,7 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
   if (const toml::array* list = root["prop"].as_array()) {
     for (std::size_t i = 0; i < list->size(); ++i) {
       const std::string where = fmt::format("prop[{}]", i);
-      TableReader t((*list)[i].as_table(), where, source_name);
+      ConfigTable t((*list)[i].as_table(), where, source_name);
       std::string kind = "ball";
       VISTEL_TRY(t.string("kind", kind));
       if (kind != "ball") {
@@ -258,7 +163,7 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
     }
   }
 
-  TableReader log(root, "log", source_name);
+  ConfigTable log(root, "log", source_name);
   VISTEL_TRY(log.string("level", c.log_level));
   VISTEL_TRY(log.checkUnknown());
   static const std::set<std::string, std::less<>> kLevels = {"trace", "debug", "info",
