@@ -88,8 +88,10 @@ struct VertexProblem {
   int ncand = 0;
   bool overflow = false;  // more colliders than kMaxCandidates (the rest dropped)
   Candidate cand[kMaxCandidates];
-  // Side result of the last evaluation (see ownExcess).
+  // Side results of the last evaluation (see ownExcess and evaluate).
   glm::vec3 smooth_gradient{0.0f};
+  glm::vec3 last_point{NAN};  // where it was, and the gradient of g there
+  glm::vec3 last_gradient{0.0f};
 };
 
 // w_v D_v(P) - T (or the free vertex's planar excess) and its gradient; also the outward
@@ -130,7 +132,7 @@ inline float ownExcess(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
 // x_i = omega_i F_i(P) - iso_i, rho_i = (1 - lambda_i) / lambda_i, i.e. (for one partner)
 // lambda (w_v D_v - T) = (1 - lambda) x: lambda = 1/2 is Gascuel's common surface. Rigid
 // partners (lambda = 0) are not in g: they are hard constraints x_i <= 0 applied after.
-inline float evaluate(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
+inline float evaluateTerms(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
   float g = ownExcess(vp, p, grad);
   for (int i = 0; i < vp.ncand; ++i) {
     const Candidate& c = vp.cand[i];
@@ -150,6 +152,23 @@ inline float evaluate(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
     }
   }
   return g;
+}
+
+// The same, remembering the point and the gradient (see gradientAt).
+inline float evaluate(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
+  const float g = evaluateTerms(vp, p, grad);
+  vp.last_point = p;
+  vp.last_gradient = grad;
+  return g;
+}
+
+// The gradient of g at p: the last evaluation's when it was at p, else a new one.
+inline glm::vec3 gradientAt(VertexProblem& vp, const glm::vec3& p, DeformCounters& cnt) {
+  if (vp.last_point == p) return vp.last_gradient;
+  glm::vec3 grad;
+  evaluate(vp, p, grad);
+  ++cnt.evaluations;
+  return grad;
 }
 
 // Deepest hard-constraint violation at p: the rigid partner with the largest x, or -1.
@@ -217,6 +236,7 @@ void gatherOwn(const Frame& fr, int v, VertexProblem& vp) {
   vp.width = m.primitives.propagation_width;
   vp.ncand = 0;
   vp.overflow = false;
+  vp.last_point = glm::vec3(NAN);
 }
 
 // Marks a collider list entry as coming from an always-pair (it applies only to the
@@ -272,6 +292,13 @@ int listColliders(const Frame& fr, const std::array<std::int16_t, 4>& key,
   return n;
 }
 
+// The lowest x = omega F_i - iso at which collider col's term can be non-zero: -width where
+// it may bulge (another body, propagation on), else the contact tolerance below 0.
+float lowestTerm(const Frame& fr, const DeformState::Collider& col) {
+  const bool bulges = fr.opt->propagation && (col.body != fr.self || fr.opt->self_propagation);
+  return bulges ? -fr.model->primitives.propagation_width : -kContactTolerance;
+}
+
 // Pass A for vertex v: picks its collision candidates from `list` (listColliders for its
 // patch) into the state's cache, each only when the rigid position p0 is near the
 // collider's support; records the rigid-pose penetration (depth, pressure) and each
@@ -293,6 +320,11 @@ void findCandidates(const Frame& fr, int v, const glm::vec3& p0,
   const float k_self = ownStiffness(fr, v);
   const std::uint32_t pair_begin = cal.pair_offsets[vi];
   const std::uint32_t pair_end = cal.pair_offsets[vi + 1];
+  float* reaches = &st.cand_reach[vi * kMaxCandidates];
+  // A collider matters only where its term can be non-zero (see lowestTerm). Bound x over
+  // the points within the cull margin of where the vertex was solved last frame (its rigid
+  // position offset by the warm start).
+  const float margin = kCullMargin + std::abs(st.offset[vi]);
   for (const std::uint16_t entry : list) {
     const int c = entry & ~kAlwaysEntry;
     DeformState::Collider& col = st.colliders[static_cast<std::size_t>(c)];
@@ -313,21 +345,25 @@ void findCandidates(const Frame& fr, int v, const glm::vec3& p0,
     glm::vec3 gd;
     const float d = skeletonDistance(col.posed->shape, p0, &gd);
     if (d > col.cull_distance) continue;
+    const PosedPrimitive& prim = *col.posed;
+    const float k_other = prim.stiffness;
+    const float omega = std::isinf(k_other) ? 1.0f : w;
+    const float r_near = std::max(d - margin * col.inv_unit, 0.0f) * prim.inv_r_out;
+    const float x_near = omega * prim.weight * densityValue(prim.density, r_near) - iso;
+    if (!(x_near > lowestTerm(fr, col))) continue;
     if (n == kMaxCandidates) {
       overflow = true;
       continue;
     }
     ids[n] = static_cast<std::uint16_t>(c);
     isos[n] = iso;
+    reaches[n] = x_near;
     ++n;
     // Rigid-pose penetration into this collider.
-    const PosedPrimitive& prim = *col.posed;
     const float r = d * prim.inv_r_out;
     if (r >= 1.0f) continue;
     float fp = 0.0f;
     const float f = prim.weight * densityValue(prim.density, r, &fp);
-    const float k_other = prim.stiffness;
-    const float omega = std::isinf(k_other) ? 1.0f : w;
     const float x = omega * f - iso;
     if (!(x > 0.0f)) continue;
     atomicMaxBits(col.pmax_bits, x);
@@ -354,10 +390,12 @@ void loadCandidates(const Frame& fr, int v, bool with_bulge, VertexProblem& vp) 
   if (n == 0) return;
   const float k_self = ownStiffness(fr, v);
   const float amplitude = fr.opt->propagation ? fr.model->primitives.propagation_amplitude : 0.0f;
+  int kept = 0;
   for (int i = 0; i < n; ++i) {
-    const int c = st.cand_collider[vi * kMaxCandidates + static_cast<std::size_t>(i)];
+    const std::size_t slot = vi * kMaxCandidates + static_cast<std::size_t>(i);
+    const int c = st.cand_collider[slot];
     const DeformState::Collider& col = st.colliders[static_cast<std::size_t>(c)];
-    Candidate& cd = vp.cand[i];
+    Candidate& cd = vp.cand[kept];
     cd.prim = col.posed;
     cd.collider = c;
     const float k_other = col.posed->stiffness;
@@ -365,18 +403,45 @@ void loadCandidates(const Frame& fr, int v, bool with_bulge, VertexProblem& vp) 
     cd.hard = cd.share == 1.0f;
     cd.rho = cd.hard ? 0.0f : cd.share / (1.0f - cd.share);
     cd.omega = std::isinf(k_other) ? 1.0f : vp.w;
-    cd.iso = st.cand_iso[vi * kMaxCandidates + static_cast<std::size_t>(i)];
+    cd.iso = st.cand_iso[slot];
     cd.k_eff = effectiveStiffness(k_self, k_other);
     const float pmax = std::bit_cast<float>(col.pmax_bits);
     const bool bulges = with_bulge && (col.body != fr.self || fr.opt->self_propagation);
     cd.bulge = bulges ? 2.0f * cd.share * vp.w * amplitude * pmax : 0.0f;
+    // Without a bulge only penetration and contact count: a candidate that stays outside
+    // the partner's surface near the vertex contributes nothing.
+    if (cd.bulge > 0.0f || st.cand_reach[slot] >= -kContactTolerance) ++kept;
   }
+  vp.ncand = kept;
 }
 
 // Own part and cached candidates of vertex v.
 void gatherProblem(const Frame& fr, int v, bool with_bulge, VertexProblem& vp) {
   gatherOwn(fr, v, vp);
   loadCandidates(fr, v, with_bulge, vp);
+}
+
+// Drops from a patch's collider list the colliders that cannot matter to any of its
+// vertices: where x = omega F_i - iso stays at or below lowestTerm everywhere within the cull
+// margin (grown by the patch's largest warm-start offset) of the patch's box, bounded with the
+// patch's largest w_v and the set's iso (pair isos are higher). Returns the new count.
+int keepReachable(const Frame& fr, const Bounds& box, float w_max, float offset_max,
+                  std::uint16_t (&list)[kMaxListed], int n) {
+  const DeformState& st = *fr.st;
+  const PrimitiveSet& set = fr.model->primitives;
+  const glm::vec3 centre = 0.5f * (box.min + box.max);
+  const float radius = 0.5f * glm::length(box.max - box.min) + kCullMargin + offset_max;
+  int kept = 0;
+  for (int i = 0; i < n; ++i) {
+    const DeformState::Collider& col = st.colliders[list[i] & ~kAlwaysEntry];
+    const PosedPrimitive& prim = *col.posed;
+    const float omega = std::isinf(prim.stiffness) ? 1.0f : w_max;
+    const float d = skeletonDistance(prim.shape, centre);
+    const float r_near = std::max(d - radius * col.inv_unit, 0.0f) * prim.inv_r_out;
+    const float x_near = omega * prim.weight * densityValue(prim.density, r_near) - set.iso;
+    if (x_near > lowestTerm(fr, col)) list[kept++] = list[i];
+  }
+  return kept;
 }
 
 // Pass A over patches [first, last): each patch's box, its collider list, then its
@@ -399,12 +464,18 @@ void passPenetration(Frame& fr, int first, int last) {
         st.patch_always_offsets[static_cast<std::size_t>(q) + 1] -
             st.patch_always_offsets[static_cast<std::size_t>(q)]);
     Bounds box{pos[st.order[b]], pos[st.order[b]]};
-    for (std::uint32_t i = b + 1; i < e; ++i) {
-      box.min = glm::min(box.min, pos[st.order[i]]);
-      box.max = glm::max(box.max, pos[st.order[i]]);
+    float w_max = 0.0f;
+    float offset_max = 0.0f;
+    for (std::uint32_t i = b; i < e; ++i) {
+      const std::uint32_t v = st.order[i];
+      box.min = glm::min(box.min, pos[v]);
+      box.max = glm::max(box.max, pos[v]);
+      w_max = std::max(w_max, cal.w[v]);
+      offset_max = std::max(offset_max, std::abs(st.offset[v]));
     }
     const std::array<std::int16_t, 4> key = cal.prims[st.order[b]];
-    const int n = listColliders(fr, {key[0], key[1], key[2], kNoPrimitive}, always, box, list);
+    int n = listColliders(fr, {key[0], key[1], key[2], kNoPrimitive}, always, box, list);
+    if (n > 0) n = keepReachable(fr, box, w_max, offset_max, list, n);
     if (n == 0) {
       for (std::uint32_t i = b; i < e; ++i) clear(st.order[i]);
       continue;
@@ -551,9 +622,11 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
     const auto vi = static_cast<std::size_t>(v);
     // A rigid limb vertex with nothing near it is on its surface by construction; so is a
     // free vertex (its own field is a plane through its rigid position).
-    if ((cal.rigid[vi] != 0 || cal.vertex_class[vi] == VertexClass::kFree) &&
-        (st.cand_count[vi] & 0x7F) == 0 && st.memory[vi] == 0.0f &&
-        opt.projection == ProjectionMode::kNormal) {
+    const bool fixed = (cal.rigid[vi] != 0 || cal.vertex_class[vi] == VertexClass::kFree) &&
+                       st.memory[vi] == 0.0f && opt.projection == ProjectionMode::kNormal;
+    const bool listed = (st.cand_count[vi] & 0x7F) != 0;
+    if (listed || !fixed) gatherProblem(fr, v, true, vp);
+    if (fixed && (!listed || vp.ncand == 0)) {
       st.offset[vi] = 0.0f;
       st.free_offset[vi] = 0.0f;
       st.positions[vi] = fr.in->rigid_positions[vi];
@@ -563,7 +636,6 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
       ++cnt.rigid_vertices;
       continue;
     }
-    gatherProblem(fr, v, true, vp);
     if (vp.overflow) ++cnt.candidate_overflow;
     if (vp.ncand > 0) ++cnt.candidate_vertices;
     std::uint8_t flags = 0;
@@ -637,6 +709,7 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
       float s_free = s_sol;
       if (vp.ncand > 0 && res.found) {
         vp.ncand = 0;
+        vp.last_point = glm::vec3(NAN);  // a different function from here on
         auto eval_free = [&](float s, float* dg) {
           glm::vec3 gr;
           const float val = evaluate(vp, vp.p0 + s * dir, gr);
@@ -684,7 +757,11 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
     const bool relax = opt.relax_passes > 0 && (flags & kVertexUnsolved) == 0 &&
                        vp.cls == VertexClass::kJoint &&
                        (std::abs(s_out) > opt.relax_min_offset || (flags & kVertexGradient) != 0);
-    if (relax) flags |= kVertexRelaxed;
+    if (relax) {
+      flags |= kVertexRelaxed;
+      ++cnt.relaxed_vertices;
+      st.field_gradient[vi] = vp.last_point == st.positions[vi] ? vp.last_gradient : glm::vec3(NAN);
+    }
     st.flags[vi] = flags;
     cnt.max_offset = std::max(cnt.max_offset, std::abs(s_out));
   }
@@ -708,9 +785,11 @@ void passRelax(Frame& fr, int first, int last, DeformCounters& cnt) {
     gatherProblem(fr, v, true, vp);
     // Outward field normal at the current position.
     const glm::vec3 p = st.positions[vi];
-    glm::vec3 grad;
-    evaluate(vp, p, grad);
-    ++cnt.evaluations;
+    glm::vec3 grad = st.field_gradient[vi];  // from the solve that put the vertex at p
+    if (std::isnan(grad.x)) {
+      evaluate(vp, p, grad);
+      ++cnt.evaluations;
+    }
     const float gn = glm::length(grad);
     if (!(gn > 0.0f)) continue;
     const glm::vec3 nu = -grad / gn;
@@ -732,7 +811,10 @@ void passRelax(Frame& fr, int first, int last, DeformCounters& cnt) {
         solveVertex(vp, nu, 0.0f, g0, gq, searchReach(vp), opt.root, local, iterated);
     cnt.evaluations += local.evaluations;
     cnt.relax_iterations += local.iterations;
-    if (res.found) st.relaxed[vi] = q + res.s * nu;
+    if (res.found) {
+      st.relaxed[vi] = q + res.s * nu;
+      st.field_gradient[vi] = vp.last_point == st.relaxed[vi] ? vp.last_gradient : glm::vec3(NAN);
+    }
   }
 }
 
@@ -826,7 +908,8 @@ void buildColliders(Frame& fr, const InteractionList& list) {
     const Shape& sh = col.posed->shape;
     const float unit =
         sh.kind == ShapeKind::kConeSphere ? std::min(sh.radius_a, sh.radius_b) : 1.0f;
-    col.cull_distance = 1.0f / col.posed->inv_r_out + kCullMargin / unit;
+    col.inv_unit = 1.0f / unit;
+    col.cull_distance = 1.0f / col.posed->inv_r_out + kCullMargin * col.inv_unit;
     st.colliders.push_back(col);
     return static_cast<int>(st.colliders.size() - 1);
   };
@@ -946,7 +1029,9 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
   st.dirty.assign(nv, 0);
   st.cand_collider.assign(nv * kMaxCandidates, 0);
   st.cand_iso.assign(nv * kMaxCandidates, 0.0f);
+  st.cand_reach.assign(nv * kMaxCandidates, 0.0f);
   st.directions.assign(nv, glm::vec3(0.0f));
+  st.field_gradient.assign(nv, glm::vec3(NAN));
   st.contacts.clear();
   st.contacts.reserve(64);
   st.counters = {};
@@ -1079,10 +1164,8 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
     total.candidate_overflow += k.candidate_overflow;
     total.candidate_vertices += k.candidate_vertices;
     total.rigid_vertices += k.rigid_vertices;
+    total.relaxed_vertices += k.relaxed_vertices;
     total.max_offset = std::max(total.max_offset, k.max_offset);
-  }
-  for (int v = 0; v < fr.nvert; ++v) {
-    if ((st.flags[static_cast<std::size_t>(v)] & kVertexRelaxed) != 0) ++total.relaxed_vertices;
   }
   st.counters = total;
 }

@@ -16,8 +16,10 @@
 //     forces per partner body.
 //
 // Space: world (rigid positions, normals and posed primitives must share it), metres,
-// seconds. Cost: O(n) in skin vertices (about one field evaluation per untouched vertex);
-// no heap allocation once the state has seen the scene's largest interaction list.
+// seconds. Cost: O(n) in skin vertices; a limb vertex skinned by its primitive's bone alone
+// costs no evaluation unless a collider's term can be non-zero within 1 cm (plus its last
+// offset) of it (a bound from the skeleton distance, per patch of vertices and then per
+// vertex); no heap allocation once the state has seen the scene's largest interaction list.
 #pragma once
 
 #include <cstdint>
@@ -132,6 +134,8 @@ struct DeformState {
     const PosedPrimitive* posed = nullptr;
     Bounds cull;                  // support box grown by a margin: farther vertices skip it
     float cull_distance = 0.0f;   // skeleton distance beyond which a vertex skips it
+    float inv_unit = 1.0f;        // skeleton-distance units per metre (cone-sphere: at most
+                                  // 1 / its smaller radius)
     std::uint32_t pmax_bits = 0;  // deepest penetration this frame (float bits, >= 0)
   };
   std::vector<Collider> colliders;
@@ -152,9 +156,14 @@ struct DeformState {
                                                     // more were dropped)
   std::vector<std::uint16_t> cand_collider;         // (nvert * kMaxCandidates)
   std::vector<float> cand_iso;                      // (nvert * kMaxCandidates)
+  std::vector<float> cand_reach;                    // (nvert * kMaxCandidates) the largest
+                                                    // x = omega F_i - iso of the candidate
+                                                    // within the cull margin of the vertex
   std::vector<std::uint8_t> dirty;                  // needs a new normal (nvert)
   std::vector<glm::vec3> relaxed;                   // relaxation pass output (nvert)
   std::vector<glm::vec3> directions;                // projection direction used (nvert)
+  std::vector<glm::vec3> field_gradient;            // relaxed vertices: grad g where the last
+                                                    // solve left them (NaN: not known)
   std::vector<DeformCounters> chunk_counters;
 };
 

@@ -8,6 +8,7 @@
 // (Gascuel 1993 uses such per-object stiffness profiles).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 
 namespace vistel {
@@ -40,6 +41,26 @@ inline float densityValue(const Density& d, float r, float* derivative = nullptr
     *derivative = r * (-24.0f / 9.0f * r4 + 68.0f / 9.0f * r2 - 44.0f / 9.0f);
   }
   return 1.0f + r2 * (-22.0f / 9.0f + r2 * (17.0f / 9.0f - 4.0f / 9.0f * r2));
+}
+
+// The same profile as a function of u = r^2: f and df/du (the Wyvill polynomial is one in
+// r^2, so a field can skip the square root of a squared distance). u is clamped like r.
+inline float densityValueSquared(const Density& d, float u, float* derivative_u = nullptr) {
+  if (u <= 0.0f || u >= 1.0f) {
+    if (derivative_u != nullptr) *derivative_u = 0.0f;
+    return u <= 0.0f ? 1.0f : 0.0f;
+  }
+  if (d.kind != DensityKind::kWyvill) {
+    const float r = std::sqrt(u);
+    float fr = 0.0f;
+    const float f = piecewiseDensity(d, r, derivative_u != nullptr ? &fr : nullptr);
+    if (derivative_u != nullptr) *derivative_u = 0.5f * fr / r;
+    return f;
+  }
+  if (derivative_u != nullptr) {
+    *derivative_u = -22.0f / 9.0f + u * (34.0f / 9.0f - 12.0f / 9.0f * u);
+  }
+  return 1.0f + u * (-22.0f / 9.0f + u * (17.0f / 9.0f - 4.0f / 9.0f * u));
 }
 
 }  // namespace vistel

@@ -45,18 +45,21 @@ void posePrimitives(const PrimitiveSet& set, std::span<const glm::mat4> skin_xfo
 PosedPrimitive posePrimitive(const Primitive& primitive, const glm::mat4& xform);
 
 // F_i(p) and, optionally, its gradient (zero outside the support and on the skeleton).
+// From the squared skeleton distance: no square root for the Wyvill profile.
 inline float primitiveField(const PosedPrimitive& prim, const glm::vec3& p,
                             glm::vec3* gradient = nullptr) {
-  glm::vec3 gd;
-  const float d =
-      skeletonDistance(prim.shape, p, gradient != nullptr ? &gd : nullptr) * prim.inv_r_out;
-  if (d >= 1.0f) {
+  float scale;
+  const glm::vec3 d = skeletonOffset(prim.shape, p, scale);
+  const float s = scale * prim.inv_r_out;
+  const float s2 = s * s;
+  const float u = glm::dot(d, d) * s2;  // (distance / r_out)^2
+  if (u >= 1.0f) {
     if (gradient != nullptr) *gradient = glm::vec3(0.0f);
     return 0.0f;
   }
-  float fp = 0.0f;
-  const float f = densityValue(prim.density, d, gradient != nullptr ? &fp : nullptr);
-  if (gradient != nullptr) *gradient = (prim.weight * fp * prim.inv_r_out) * gd;
+  float fu = 0.0f;
+  const float f = densityValueSquared(prim.density, u, gradient != nullptr ? &fu : nullptr);
+  if (gradient != nullptr) *gradient = (2.0f * prim.weight * fu * s2) * d;
   return prim.weight * f;
 }
 

@@ -47,13 +47,10 @@ float segmentPolygonDistance(const glm::vec3& p0, const glm::vec3& p1, const Sha
 
 }  // namespace
 
-float polygonDistance(const Shape& s, const glm::vec3& p, glm::vec3* gradient) {
+glm::vec3 polygonOffset(const Shape& s, const glm::vec3& p) {
   const glm::vec3 r = p - s.a;
   const glm::vec2 c = closestInPolygon(s, glm::vec2(glm::dot(r, s.u), glm::dot(r, s.v)));
-  const glm::vec3 d = r - c.x * s.u - c.y * s.v;
-  const float len = std::sqrt(glm::dot(d, d));
-  if (gradient != nullptr) *gradient = len > 0.0f ? d * (1.0f / len) : glm::vec3(0.0f);
-  return len;
+  return r - c.x * s.u - c.y * s.v;
 }
 
 void prepareShape(Shape& s) {

@@ -110,26 +110,23 @@ inline glm::vec2 closestInPolygon(const Shape& s, const glm::vec2& q) {
   return closest;
 }
 
-// Per-kind kernels of skeletonDistance (same contract). The polygon's is out of line.
-inline float sphereDistance(const Shape& s, const glm::vec3& p, glm::vec3* gradient) {
-  const glm::vec3 d = p - s.a;
-  const float len = std::sqrt(glm::dot(d, d));
-  if (gradient != nullptr) *gradient = len > 0.0f ? d * (1.0f / len) : glm::vec3(0.0f);
-  return len;
-}
+// Per-kind kernels: the offset d = p - c from the skeleton's closest point c (for the
+// cone-sphere, the point minimising the ratio), and the scale that turns |d| into the
+// skeleton distance (1 for metric shapes, 1 / r(z) for the cone-sphere). The distance is
+// |d| scale and its gradient d scale / |d|; the squared distance |d|^2 scale^2 has the
+// gradient 2 d scale^2 (no square root).
+inline glm::vec3 sphereOffset(const Shape& s, const glm::vec3& p) { return p - s.a; }
 
-inline float segmentDistance(const Shape& s, const glm::vec3& p, glm::vec3* gradient) {
+inline glm::vec3 segmentOffset(const Shape& s, const glm::vec3& p) {
   const glm::vec3 ap = p - s.a;
   const float t = std::clamp(glm::dot(ap, s.axis), 0.0f, s.length);
-  const glm::vec3 d = ap - t * s.axis;
-  const float len = std::sqrt(glm::dot(d, d));
-  if (gradient != nullptr) *gradient = len > 0.0f ? d * (1.0f / len) : glm::vec3(0.0f);
-  return len;
+  return ap - t * s.axis;
 }
 
-inline float coneDistance(const Shape& s, const glm::vec3& p, glm::vec3* gradient) {
+inline glm::vec3 coneOffset(const Shape& s, const glm::vec3& p, float& scale) {
   // Axial coordinate x and squared radial distance y2 of p; the stationary point of
-  // |p - c(z)| / r(z) is z* = x + k y2 / r(x) with k = dr/dz (when r(x) > 0).
+  // |p - c(z)| / r(z) is z* = x + k y2 / r(x) with k = dr/dz (when r(x) > 0). The
+  // minimiser's own motion does not contribute to the gradient.
   const glm::vec3 ap = p - s.a;
   const float x = glm::dot(ap, s.axis);
   const float y2 = std::max(glm::dot(ap, ap) - x * x, 0.0f);
@@ -141,41 +138,42 @@ inline float coneDistance(const Shape& s, const glm::vec3& p, glm::vec3* gradien
   } else {
     z = k > 0.0f ? s.length : 0.0f;  // beyond the apex: the larger end is nearest
   }
-  const glm::vec3 d = ap - z * s.axis;
-  const float inv_scale = 1.0f / (s.radius_a + k * z);
-  const float len = std::sqrt(glm::dot(d, d));
-  // Distance and its gradient (the minimiser's own motion does not contribute).
-  if (gradient != nullptr) *gradient = len > 0.0f ? d * (inv_scale / len) : glm::vec3(0.0f);
-  return len * inv_scale;
+  scale = 1.0f / (s.radius_a + k * z);
+  return ap - z * s.axis;
 }
 
-float polygonDistance(const Shape& s, const glm::vec3& p, glm::vec3* gradient);
-
-inline float rectangleDistance(const Shape& s, const glm::vec3& p, glm::vec3* gradient) {
+inline glm::vec3 rectangleOffset(const Shape& s, const glm::vec3& p) {
   const glm::vec3 r = p - s.a;
-  const float x = glm::dot(r, s.u);
-  const float y = glm::dot(r, s.v);
-  const float cx = std::clamp(x, s.rect_min.x, s.rect_max.x);
-  const float cy = std::clamp(y, s.rect_min.y, s.rect_max.y);
-  const glm::vec3 d = r - cx * s.u - cy * s.v;
-  const float len = std::sqrt(glm::dot(d, d));
-  if (gradient != nullptr) *gradient = len > 0.0f ? d * (1.0f / len) : glm::vec3(0.0f);
-  return len;
+  const float cx = std::clamp(glm::dot(r, s.u), s.rect_min.x, s.rect_max.x);
+  const float cy = std::clamp(glm::dot(r, s.v), s.rect_min.y, s.rect_max.y);
+  return r - cx * s.u - cy * s.v;
+}
+
+glm::vec3 polygonOffset(const Shape& s, const glm::vec3& p);
+
+// The offset from the skeleton of any shape (see the kernels above).
+inline glm::vec3 skeletonOffset(const Shape& s, const glm::vec3& p, float& scale) {
+  scale = 1.0f;
+  switch (s.kind) {
+    case ShapeKind::kSphere:
+      return sphereOffset(s, p);
+    case ShapeKind::kSphylinder:
+      return segmentOffset(s, p);
+    case ShapeKind::kConeSphere:
+      return coneOffset(s, p, scale);
+    case ShapeKind::kOffsetPolygon:
+      if (s.rectangle) return rectangleOffset(s, p);
+      break;
+  }
+  return polygonOffset(s, p);
 }
 
 inline float skeletonDistance(const Shape& s, const glm::vec3& p, glm::vec3* gradient) {
-  switch (s.kind) {
-    case ShapeKind::kSphere:
-      return sphereDistance(s, p, gradient);
-    case ShapeKind::kSphylinder:
-      return segmentDistance(s, p, gradient);
-    case ShapeKind::kConeSphere:
-      return coneDistance(s, p, gradient);
-    case ShapeKind::kOffsetPolygon:
-      if (s.rectangle) return rectangleDistance(s, p, gradient);
-      break;
-  }
-  return polygonDistance(s, p, gradient);
+  float scale;
+  const glm::vec3 d = skeletonOffset(s, p, scale);
+  const float len = std::sqrt(glm::dot(d, d));
+  if (gradient != nullptr) *gradient = len > 0.0f ? d * (scale / len) : glm::vec3(0.0f);
+  return len * scale;
 }
 
 }  // namespace vistel
