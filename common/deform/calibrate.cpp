@@ -7,6 +7,10 @@
 #include <cmath>
 #include <numbers>
 
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/Sparse>
+#include <glm/gtx/component_wise.hpp>
+
 #include "common/deform/posed_primitives.hpp"
 #include "common/deform/vertex_field.hpp"
 
@@ -24,6 +28,104 @@ float surfaceSlope(const PrimitiveSet& set, const PosedPrimitive& p, const Primi
 }
 
 }  // namespace
+
+void fitSkinWeights(ImplicitModel& model, std::span<const glm::vec3> pos, int samples) {
+  const Calibration& c = model.calibration;
+  std::vector<std::uint32_t> own;
+  for (std::size_t i = 0; i < model.primitives.items.size(); ++i) {
+    Primitive& p = model.primitives.items[i];
+    SkinWeightGrid& g = p.skin_weight;
+    g = SkinWeightGrid{};
+    own.clear();
+    for (std::uint32_t v = 0; v < c.prims.size(); ++v) {
+      if (c.vertex_class[v] != VertexClass::kFree && c.prims[v][0] == static_cast<int>(i))
+        own.push_back(v);
+    }
+    if (own.empty() || samples < 2) continue;
+    g.box = posePrimitive(p, glm::mat4(1.0f)).bounds;
+    g.n = std::min(samples, kMaxSkinWeightSamples);
+    const int n = g.n;
+    const auto cells = static_cast<Eigen::Index>(n) * n * n;
+    const auto index = [n](int x, int y, int z) {
+      return static_cast<Eigen::Index>((z * n + y) * n + x);
+    };
+    // Least squares: the trilinear interpolation reproduces w_v at every own vertex (and
+    // along its ray just above and beneath it), and neighbouring samples agree (a small membrane
+    // term that also fills samples no vertex is near). Normal equations, solved by conjugate
+    // gradients from w = 1.
+    std::vector<Eigen::Triplet<double>> terms;
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(cells);
+    const glm::vec3 size = g.box.max - g.box.min;
+    const float last = static_cast<float>(n - 1);
+    const PosedPrimitive rest = posePrimitive(p, glm::mat4(1.0f));
+    const float cell = glm::compMin(size) / last;
+    const auto add = [&](const glm::vec3& q, double value, double weight) {
+      const glm::vec3 u =
+          glm::clamp((q - g.box.min) / size * last, glm::vec3(0.0f), glm::vec3(last));
+      const glm::ivec3 i0 = glm::min(glm::ivec3(u), glm::ivec3(n - 2));
+      const glm::vec3 t = u - glm::vec3(i0);
+      Eigen::Index idx[8];
+      double wt[8];
+      for (int k = 0; k < 8; ++k) {
+        const int dx = k & 1, dy = (k >> 1) & 1, dz = (k >> 2) & 1;
+        idx[k] = index(i0.x + dx, i0.y + dy, i0.z + dz);
+        wt[k] = static_cast<double>(dx != 0 ? t.x : 1.0f - t.x) * (dy != 0 ? t.y : 1.0f - t.y) *
+                (dz != 0 ? t.z : 1.0f - t.z);
+      }
+      for (int a = 0; a < 8; ++a) {
+        rhs[idx[a]] += weight * wt[a] * value;
+        for (int b = 0; b < 8; ++b) terms.emplace_back(idx[a], idx[b], weight * wt[a] * wt[b]);
+      }
+    };
+    for (const std::uint32_t v : own) {
+      add(pos[v], c.w[v], 1.0);
+      // The same weight a little above and beneath the skin along the ray from the
+      // skeleton, so that a partner point just inside the body meets this skin's weight
+      // rather than the interior's blend of all of them.
+      float scale;
+      const glm::vec3 d = skeletonOffset(rest.shape, pos[v], scale);
+      const float depth = glm::length(d);
+      if (!(depth > 0.0f)) continue;
+      const glm::vec3 out = d / depth;
+      for (const float k : {-2.0f, -1.0f, 1.0f}) {
+        const float t = std::max(k * cell, -0.8f * depth);
+        add(pos[v] + t * out, c.w[v], 0.5);
+      }
+    }
+    const double membrane = 1e-2 * static_cast<double>(own.size()) / static_cast<double>(cells);
+    for (int z = 0; z < n; ++z) {
+      for (int y = 0; y < n; ++y) {
+        for (int x = 0; x < n; ++x) {
+          const Eigen::Index a = index(x, y, z);
+          const Eigen::Index next[3] = {x + 1 < n ? index(x + 1, y, z) : -1,
+                                        y + 1 < n ? index(x, y + 1, z) : -1,
+                                        z + 1 < n ? index(x, y, z + 1) : -1};
+          for (const Eigen::Index b : next) {
+            if (b < 0) continue;
+            terms.emplace_back(a, a, membrane);
+            terms.emplace_back(b, b, membrane);
+            terms.emplace_back(a, b, -membrane);
+            terms.emplace_back(b, a, -membrane);
+          }
+        }
+      }
+    }
+    Eigen::SparseMatrix<double> normal(cells, cells);
+    normal.setFromTriplets(terms.begin(), terms.end());
+    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> cg;
+    cg.setTolerance(1e-8);
+    cg.compute(normal);
+    const Eigen::VectorXd solved = cg.solveWithGuess(rhs, Eigen::VectorXd::Ones(cells));
+    g.values.resize(static_cast<std::size_t>(cells));
+    g.max_value = kMinSkinWeight;
+    for (Eigen::Index k = 0; k < cells; ++k) {
+      const double x = std::isfinite(solved[k]) ? solved[k] : 1.0;
+      const float value = std::clamp(static_cast<float>(x), kMinSkinWeight, kMaxSkinWeight);
+      g.values[static_cast<std::size_t>(k)] = value;
+      g.max_value = std::max(g.max_value, value);
+    }
+  }
+}
 
 Result<CalibrationReport> calibrateModel(ImplicitModel& model, std::span<const glm::vec3> pos,
                                          std::span<const glm::vec3> nrm,
@@ -90,8 +192,15 @@ Result<CalibrationReport> calibrateModel(ImplicitModel& model, std::span<const g
     } else {
       ++report.limb;
     }
+  }
+  // The skins' weights around their primitives, then the rest contacts measured against
+  // them (a partner meets a primitive's skin where w_i F_i = T).
+  fitSkinWeights(model, pos);
+  for (std::size_t i = 0; i < np; ++i) rest.items[i] = posePrimitive(set.items[i], glm::mat4(1.0f));
+  for (std::size_t v = 0; v < nv; ++v) {
+    const auto& pr = c.prims[v];
+    const VertexClass cls = c.vertex_class[v];
     // Rest contacts with same-body primitives that collide with the vertex's own ones.
-    const float w = c.w[v];
     const int owners = cls == VertexClass::kJoint ? 3 : 1;
     for (std::size_t i = 0; i < np; ++i) {
       const auto ii = static_cast<std::int16_t>(i);
@@ -104,17 +213,27 @@ Result<CalibrationReport> calibrateModel(ImplicitModel& model, std::span<const g
         if (o >= 0 && model.graph.collides(o, static_cast<int>(i))) collides = true;
       }
       if (!collides) continue;
-      const float omega = std::isinf(set.items[i].stiffness) ? 1.0f : w;
+      // The partner's skin weight, or the own one for a neighbouring part (as in Step 2).
+      bool neighbour = false;
+      for (int k = 0; k < owners; ++k) {
+        const std::int16_t o = pr[static_cast<std::size_t>(k)];
+        if (o >= 0 && model.graph.neighbours(o, static_cast<int>(i))) neighbour = true;
+      }
+      const float omega = std::isinf(set.items[i].stiffness)
+                              ? 1.0f
+                              : (neighbour ? c.w[v] : skinWeight(rest.items[i], pos[v]));
       const float x = omega * primitiveField(rest.items[i], pos[v]);
       if (x > iso * (1.0f - opt.rest_margin)) {
         c.pairs.push_back({ii, 0, x + iso * opt.rest_margin});
         ++report.rest_pairs;
       }
     }
-    // A joint vertex also collides with its opposite limb, from its rest value on.
+    // A joint vertex also collides with its opposite limb, from its rest value on, scaled
+    // by its own weight (the crease between adjacent limbs is calibrated at rest, where
+    // the two skins are one).
     if (cls == VertexClass::kJoint) {
       const auto opp = static_cast<std::size_t>(pr[2]);
-      const float omega = std::isinf(set.items[opp].stiffness) ? 1.0f : w;
+      const float omega = std::isinf(set.items[opp].stiffness) ? 1.0f : c.w[v];
       const float x = omega * primitiveField(rest.items[opp], pos[v]);
       c.pairs.push_back({pr[2], kPairAlways, std::max(iso, x + iso * opt.always_margin)});
     }

@@ -41,6 +41,16 @@ Result<CalibrationReport> calibrateModel(ImplicitModel& model,
                                          std::span<const glm::vec3> rest_normals,
                                          const CalibrationOptions& options = {});
 
+// Fits every primitive's skin weight grid (Primitive::skin_weight) to the weights w_v of
+// the vertices it defines (limb and joint vertices with p0 = it): samples^3 values over its
+// support box at rest, by least squares so that the grid's trilinear interpolation
+// reproduces w_v at those vertices, with a small membrane term that keeps neighbouring
+// samples close and fills those no vertex is near; clamped to [kMinSkinWeight,
+// kMaxSkinWeight]. A primitive that defines no vertex gets none (w = 1). calibrateModel
+// calls it.
+void fitSkinWeights(ImplicitModel& model, std::span<const glm::vec3> rest_positions,
+                    int samples = 16);
+
 // Tangential relaxation weights (Vaillant et al. 2013): for each vertex, its one-ring
 // and mean-value coordinates of the vertex in the ring projected on its tangent plane
 // (uniform weights where the ring is open, non-manifold or not star-shaped), so that the

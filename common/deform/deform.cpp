@@ -22,6 +22,10 @@ constexpr float kReshapeOffset = 1e-4f;
 // A vertex at its solution is on the contact surface when its deepest partner term is
 // within this of the penetration zone.
 constexpr float kContactTolerance = 1e-5f;
+// A rigid-pose penetration shallower than this (metres) is not a contact: it is below what
+// float round-off in the pose can decide (a vertex grazing its partner's skin would be in
+// contact in one frame of reference and not in another).
+constexpr float kMinContactDepth = 1e-6f;
 constexpr float kDefaultStiffness = 3.0e4f;
 // A collider is a candidate for a vertex only when the rigid position lies within this
 // margin of the collider's support box (a vertex outside the support has its root where
@@ -63,7 +67,7 @@ float effectiveStiffness(float k_self, float k_other) {  // springs in series
 
 struct Candidate {
   const PosedPrimitive* prim = nullptr;
-  float omega = 1.0f;  // partner field scale: w_v for a deformable partner, 1 for a rigid one
+  float omega = 1.0f;  // partner field scale: its skin weight (see cand_omega), 1 when rigid
   float iso = 0.5f;    // the pair's threshold
   float share = 0.5f;  // 1 - lambda: how much of the contact this vertex takes
   float rho = 1.0f;    // (1 - lambda) / lambda: weight of the penetration term (lambda > 0)
@@ -316,11 +320,13 @@ void findCandidates(const Frame& fr, int v, const glm::vec3& p0,
   bool overflow = false;
   float best_depth = 0.0f;
   float best_pressure = 0.0f;
-  const float w = cal.w[vi];
   const float k_self = ownStiffness(fr, v);
   const std::uint32_t pair_begin = cal.pair_offsets[vi];
   const std::uint32_t pair_end = cal.pair_offsets[vi + 1];
   float* reaches = &st.cand_reach[vi * kMaxCandidates];
+  float* omegas = &st.cand_omega[vi * kMaxCandidates];
+  const float w = cal.w[vi];
+  const CombinationGraph& graph = m.graph;
   // A collider matters only where its term can be non-zero (see lowestTerm). Bound x over
   // the points within the cull margin of where the vertex was solved last frame (its rigid
   // position offset by the warm start).
@@ -347,7 +353,13 @@ void findCandidates(const Frame& fr, int v, const glm::vec3& p0,
     if (d > col.cull_distance) continue;
     const PosedPrimitive& prim = *col.posed;
     const float k_other = prim.stiffness;
-    const float omega = std::isinf(k_other) ? 1.0f : w;
+    // The partner field's scale: 1 for a rigid partner; the vertex's own weight for a
+    // neighbouring part of its body (joined to one of its primitives through a joint: the
+    // two skins meet at a crease calibrated at rest); else the partner's skin weight.
+    const bool neighbour = same && (always || (pr[0] >= 0 && graph.neighbours(pr[0], col.prim)) ||
+                                    (pr[1] >= 0 && graph.neighbours(pr[1], col.prim)) ||
+                                    (pr[2] >= 0 && graph.neighbours(pr[2], col.prim)));
+    const float omega = std::isinf(k_other) ? 1.0f : (neighbour ? w : skinWeight(prim, p0));
     const float r_near = std::max(d - margin * col.inv_unit, 0.0f) * prim.inv_r_out;
     const float x_near = omega * prim.weight * densityValue(prim.density, r_near) - iso;
     if (!(x_near > lowestTerm(fr, col))) continue;
@@ -358,6 +370,7 @@ void findCandidates(const Frame& fr, int v, const glm::vec3& p0,
     ids[n] = static_cast<std::uint16_t>(c);
     isos[n] = iso;
     reaches[n] = x_near;
+    omegas[n] = omega;
     ++n;
     // Rigid-pose penetration into this collider.
     const float r = d * prim.inv_r_out;
@@ -369,7 +382,7 @@ void findCandidates(const Frame& fr, int v, const glm::vec3& p0,
     atomicMaxBits(col.pmax_bits, x);
     const float gn = omega * prim.weight * std::abs(fp) * prim.inv_r_out * glm::length(gd);
     const float depth = gn > 0.0f ? x / gn : 0.0f;
-    if (depth > best_depth) {
+    if (depth > best_depth && depth > kMinContactDepth) {
       best_depth = depth;
       best_pressure = effectiveStiffness(k_self, k_other) * depth;
     }
@@ -400,9 +413,10 @@ void loadCandidates(const Frame& fr, int v, bool with_bulge, VertexProblem& vp) 
     cd.collider = c;
     const float k_other = col.posed->stiffness;
     cd.share = shareOf(k_self, k_other);
-    cd.hard = cd.share == 1.0f;
+    // A free vertex has no field for the partner to meet: it takes the whole contact.
+    cd.hard = cd.share == 1.0f || (vp.cls == VertexClass::kFree && cd.share > 0.0f);
     cd.rho = cd.hard ? 0.0f : cd.share / (1.0f - cd.share);
-    cd.omega = std::isinf(k_other) ? 1.0f : vp.w;
+    cd.omega = st.cand_omega[slot];
     cd.iso = st.cand_iso[slot];
     cd.k_eff = effectiveStiffness(k_self, k_other);
     const float pmax = std::bit_cast<float>(col.pmax_bits);
@@ -424,8 +438,8 @@ void gatherProblem(const Frame& fr, int v, bool with_bulge, VertexProblem& vp) {
 // Drops from a patch's collider list the colliders that cannot matter to any of its
 // vertices: where x = omega F_i - iso stays at or below lowestTerm everywhere within the cull
 // margin (grown by the patch's largest warm-start offset) of the patch's box, bounded with the
-// patch's largest w_v and the set's iso (pair isos are higher). Returns the new count.
-int keepReachable(const Frame& fr, const Bounds& box, float w_max, float offset_max,
+// collider's largest skin weight and the set's iso (pair isos are higher). Returns the new count.
+int keepReachable(const Frame& fr, const Bounds& box, float offset_max,
                   std::uint16_t (&list)[kMaxListed], int n) {
   const DeformState& st = *fr.st;
   const PrimitiveSet& set = fr.model->primitives;
@@ -435,7 +449,7 @@ int keepReachable(const Frame& fr, const Bounds& box, float w_max, float offset_
   for (int i = 0; i < n; ++i) {
     const DeformState::Collider& col = st.colliders[list[i] & ~kAlwaysEntry];
     const PosedPrimitive& prim = *col.posed;
-    const float omega = std::isinf(prim.stiffness) ? 1.0f : w_max;
+    const float omega = std::isinf(prim.stiffness) ? 1.0f : prim.max_skin_weight;
     const float d = skeletonDistance(prim.shape, centre);
     const float r_near = std::max(d - radius * col.inv_unit, 0.0f) * prim.inv_r_out;
     const float x_near = omega * prim.weight * densityValue(prim.density, r_near) - set.iso;
@@ -464,18 +478,16 @@ void passPenetration(Frame& fr, int first, int last) {
         st.patch_always_offsets[static_cast<std::size_t>(q) + 1] -
             st.patch_always_offsets[static_cast<std::size_t>(q)]);
     Bounds box{pos[st.order[b]], pos[st.order[b]]};
-    float w_max = 0.0f;
     float offset_max = 0.0f;
     for (std::uint32_t i = b; i < e; ++i) {
       const std::uint32_t v = st.order[i];
       box.min = glm::min(box.min, pos[v]);
       box.max = glm::max(box.max, pos[v]);
-      w_max = std::max(w_max, cal.w[v]);
       offset_max = std::max(offset_max, std::abs(st.offset[v]));
     }
     const std::array<std::int16_t, 4> key = cal.prims[st.order[b]];
     int n = listColliders(fr, {key[0], key[1], key[2], kNoPrimitive}, always, box, list);
-    if (n > 0) n = keepReachable(fr, box, w_max, offset_max, list, n);
+    if (n > 0) n = keepReachable(fr, box, offset_max, list, n);
     if (n == 0) {
       for (std::uint32_t i = b; i < e; ++i) clear(st.order[i]);
       continue;
@@ -543,7 +555,7 @@ inline int deepestPartner(const VertexProblem& vp, const glm::vec3& p, float& x_
 
 // Solves the soft equation along dir from s_start (first evaluation g, grad given), then
 // enforces the hard constraints (rigid partners: the vertex ends on their surface).
-RootResult solveVertex(VertexProblem& vp, const glm::vec3& dir, float s_start, float g,
+RootResult solveVertex(VertexProblem& vp, glm::vec3& dir, float s_start, float g,
                        const glm::vec3& grad, float reach, const RootOptions& ropt,
                        DeformCounters& cnt, bool& iterated) {
   const glm::vec3 p0 = vp.p0;
@@ -579,8 +591,45 @@ RootResult solveVertex(VertexProblem& vp, const glm::vec3& dir, float s_start, f
     const RootResult rh = findRoot(eval_hard, res.s, reach, ropt);
     cnt.evaluations += 1 + rh.iterations;
     cnt.iterations += 1 + rh.iterations;
-    res.found = rh.found;
-    if (rh.found) res.s = rh.s;
+    // The shortest way out of the partner is along its gradient: about x / |grad(omega F)|.
+    const glm::vec3 p1 = p0 + res.s * dir;
+    glm::vec3 inward;
+    primitiveField(*c.prim, p1, &inward);
+    const float len = glm::length(inward);
+    const float exit = len > 0.0f ? x / (c.omega * len) : INFINITY;
+    if (rh.found && std::abs(rh.s - res.s) <= std::max(kGrazeMinOffset, kGrazeFactor * exit)) {
+      res.s = rh.s;
+      continue;
+    }
+    // Along the line the vertex leaves the partner only far away, or never (a fingertip
+    // beside a face): it leaves along the partner's gradient from where the soft solve put
+    // it instead (when that is nearer), and the line becomes the one from its rigid
+    // position to there.
+    bool escaped = false;
+    if (len > 0.0f) {
+      inward /= len;
+      auto eval_out = [&](float s, float* dg) {
+        glm::vec3 gf;
+        const float f = primitiveField(*c.prim, p1 + s * inward, &gf);
+        *dg = -c.omega * glm::dot(gf, inward);
+        return c.iso - c.omega * f;
+      };
+      const RootResult ro = findRoot(eval_out, 0.0f, reach, ropt);
+      cnt.evaluations += 1 + ro.iterations;
+      cnt.iterations += 1 + ro.iterations;
+      if (ro.found && (!rh.found || std::abs(ro.s) < std::abs(rh.s - res.s))) {
+        const glm::vec3 moved = p1 + ro.s * inward - p0;
+        const float dist = glm::length(moved);
+        res.s = dist;
+        if (dist > 0.0f) dir = moved / dist;
+        escaped = true;
+      }
+    }
+    if (!escaped) {
+      res.found = rh.found;
+      if (!rh.found) break;
+      res.s = rh.s;
+    }
   }
   return res;
 }
@@ -600,7 +649,7 @@ bool reprojectOnContact(VertexProblem& vp, float reach, const RootOptions& ropt,
   ++cnt.evaluations;
   const float len = glm::length(grad_root);
   if (!(len > 0.0f)) return false;
-  const glm::vec3 m = -grad_root / len;
+  glm::vec3 m = -grad_root / len;
   if (glm::dot(m, dir) >= kGrazeCos) return false;
   glm::vec3 grad0;
   const float g0 = evaluate(vp, vp.p0, grad0);
@@ -792,7 +841,7 @@ void passRelax(Frame& fr, int first, int last, DeformCounters& cnt) {
     }
     const float gn = glm::length(grad);
     if (!(gn > 0.0f)) continue;
-    const glm::vec3 nu = -grad / gn;
+    glm::vec3 nu = -grad / gn;
     // Tangential move towards the barycentre.
     glm::vec3 centre(0.0f);
     for (std::uint32_t j = r0; j < r1; ++j)
@@ -1030,6 +1079,7 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
   st.cand_collider.assign(nv * kMaxCandidates, 0);
   st.cand_iso.assign(nv * kMaxCandidates, 0.0f);
   st.cand_reach.assign(nv * kMaxCandidates, 0.0f);
+  st.cand_omega.assign(nv * kMaxCandidates, 1.0f);
   st.directions.assign(nv, glm::vec3(0.0f));
   st.field_gradient.assign(nv, glm::vec3(NAN));
   st.contacts.clear();

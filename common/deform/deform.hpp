@@ -159,6 +159,9 @@ struct DeformState {
   std::vector<float> cand_reach;                    // (nvert * kMaxCandidates) the largest
                                                     // x = omega F_i - iso of the candidate
                                                     // within the cull margin of the vertex
+  std::vector<float> cand_omega;                    // (nvert * kMaxCandidates) the partner
+                                                    // field's scale: its skin weight near
+                                                    // the vertex, 1 for a rigid partner
   std::vector<std::uint8_t> dirty;                  // needs a new normal (nvert)
   std::vector<glm::vec3> relaxed;                   // relaxation pass output (nvert)
   std::vector<glm::vec3> directions;                // projection direction used (nvert)
@@ -181,7 +184,8 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
                 const DeformOptions& options = {}, TaskPool* pool = nullptr);
 
 // One collision term COLL_i,v of DESIGN.md §3 in field units, as a function of
-// x = omega * F_i(P) - iso_pair (omega = w_v for a deformable partner, 1 for a rigid one):
+// x = omega * F_i(P) - iso_pair (omega = w_i, the partner's skin weight near the vertex,
+// for a deformable partner, so x = 0 on the partner's skin; 1 for a rigid one):
 //   penetration zone (x > 0):          COLL = -x (so F = T where w_v D_v = omega F_i)
 //   propagation zone (-width < x <= 0): COLL = bulge * h(-x / width), h(s) = 27/4 s (1-s)^2
 //   elsewhere:                          0.
@@ -192,6 +196,8 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
 // (one partner: lambda (w_v D_v - T) = (1 - lambda) x; lambda = 1/2 is the paper's common
 // surface, lambda = 1 leaves the vertex undeformed); a rigid partner (lambda = 0) is a
 // hard constraint x <= 0 solved after, which puts the vertex exactly on its surface.
+// A free vertex (no field of its own for the partner to meet) treats every soft partner
+// as rigid: it ends on the partner's skin.
 // bulge = 2 (1 - lambda) w_v a p_max (a: the set's propagation amplitude, p_max: the
 // deepest x of this partner over the body's rigid vertices this frame).
 inline float collisionTerm(float x, float bulge, float width, float* derivative = nullptr) {

@@ -1,5 +1,7 @@
 #include "common/deform/implicit_codec.hpp"
 
+#include <algorithm>
+
 namespace vistel {
 namespace {
 
@@ -59,6 +61,13 @@ void encodePrimitiveSet(const PrimitiveSet& s, ByteWriter& w) {
     w.f32(p.density.slope);
     w.f32(p.stiffness);
     w.f32(p.time_constant);
+    const SkinWeightGrid& g = p.skin_weight;
+    w.u8(static_cast<std::uint8_t>(g.n));
+    if (g.n != 0) {
+      vec3(w, g.box.min);
+      vec3(w, g.box.max);
+      for (const float x : g.values) w.f32(x);
+    }
   }
 }
 
@@ -108,6 +117,18 @@ Result<PrimitiveSet> decodePrimitiveSet(std::span<const std::uint8_t> bytes, int
     p.density.slope = r.f32();
     p.stiffness = r.f32();
     p.time_constant = r.f32();
+    SkinWeightGrid& g = p.skin_weight;
+    g.n = r.u8();
+    if (r.ok() && g.n != 0) {
+      if (g.n < 2 || g.n > kMaxSkinWeightSamples) {
+        return fail("primitive set: primitive {} skin weight grid of {} samples per axis", i, g.n);
+      }
+      g.box.min = vec3(r);
+      g.box.max = vec3(r);
+      g.values.resize(static_cast<std::size_t>(g.n * g.n * g.n));
+      for (float& x : g.values) x = r.f32();
+      g.max_value = *std::max_element(g.values.begin(), g.values.end());
+    }
     prepareShape(p.shape);
   }
   if (Status st = finish(r, "primitive set"); !st) return st.error();

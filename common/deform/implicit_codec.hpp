@@ -19,7 +19,7 @@
 
 namespace vistel {
 
-inline constexpr std::uint32_t kPrimitiveSetVersion = 1;
+inline constexpr std::uint32_t kPrimitiveSetVersion = 2;
 inline constexpr std::uint32_t kCombinationGraphVersion = 1;
 inline constexpr std::uint32_t kCalibrationVersion = 1;
 

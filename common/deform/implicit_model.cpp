@@ -28,6 +28,19 @@ void finalizeGraph(CombinationGraph& g, int n) {
     g.collide_matrix[static_cast<std::size_t>(p[0]) * static_cast<std::size_t>(n) + p[1]] = 1;
     g.collide_matrix[static_cast<std::size_t>(p[1]) * static_cast<std::size_t>(n) + p[0]] = 1;
   }
+  g.neighbour_matrix.assign(static_cast<std::size_t>(n) * static_cast<std::size_t>(n), 0);
+  const auto join = [&g, n](int i, int j) {
+    if (i >= n || j >= n) return;  // validateCombinationGraph reports these
+    g.neighbour_matrix[static_cast<std::size_t>(i) * static_cast<std::size_t>(n) +
+                       static_cast<std::size_t>(j)] = 1;
+    g.neighbour_matrix[static_cast<std::size_t>(j) * static_cast<std::size_t>(n) +
+                       static_cast<std::size_t>(i)] = 1;
+  };
+  for (const Blend& b : g.blends) {
+    join(b.limb_a, b.limb_b);
+    join(b.joint, b.limb_a);
+    join(b.joint, b.limb_b);
+  }
 }
 
 Status validatePrimitiveSet(const PrimitiveSet& s, int joint_count) {
@@ -60,6 +73,24 @@ Status validatePrimitiveSet(const PrimitiveSet& s, int joint_count) {
     if (!finitePositive(p.weight)) return bad("shape weight must be positive and finite");
     if (!(p.stiffness > 0.0f) || std::isnan(p.stiffness)) return bad("stiffness must be > 0");
     if (!finitePositive(p.time_constant)) return bad("time constant must be > 0");
+    const SkinWeightGrid& g = p.skin_weight;
+    if (g.n != 0) {
+      if (g.n < 2 || g.n > kMaxSkinWeightSamples) return bad("skin weight grid size out of range");
+      const auto count = static_cast<std::size_t>(g.n) * static_cast<std::size_t>(g.n) *
+                         static_cast<std::size_t>(g.n);
+      if (g.values.size() != count) return bad("skin weight grid has the wrong sample count");
+      for (int k = 0; k < 3; ++k) {
+        if (!std::isfinite(g.box.min[k]) || !std::isfinite(g.box.max[k]) ||
+            !(g.box.min[k] < g.box.max[k])) {
+          return bad("skin weight grid box must be finite and non-empty");
+        }
+      }
+      for (const float x : g.values) {
+        if (!(x >= kMinSkinWeight && x <= kMaxSkinWeight)) {
+          return bad("skin weight sample out of range");
+        }
+      }
+    }
   }
   return {};
 }

@@ -37,6 +37,45 @@ enum class Elasticity : std::uint8_t {
   kViscoelastic = 2,  // a dent recovers as exp(-dt / time_constant) when contact ends
 };
 
+// The calibration weights w_v of a primitive's own skin (its limb or joint vertices) as a
+// field around it in bind-pose model space: the skin that primitive makes lies where
+// w(P) F(P) = T, so a partner vertex meets that skin, not the raw iso-surface F = T
+// (which a fitted primitive misses by centimetres on a real face or hand). Trilinear over
+// n^3 samples spanning `box`, clamped at its faces; n = 0: 1 everywhere (exact primitives,
+// props).
+struct SkinWeightGrid {
+  Bounds box;                 // bind-pose model space; min < max on every axis
+  int n = 0;                  // samples per axis: 0, or 2..kMaxSkinWeightSamples
+  std::vector<float> values;  // n^3, x fastest, then y, then z; each in [kMinSkinWeight,
+                              // kMaxSkinWeight]
+  float max_value = 1.0f;     // the largest sample (1 when n = 0)
+};
+inline constexpr int kMaxSkinWeightSamples = 16;
+inline constexpr float kMinSkinWeight = 0.25f;
+inline constexpr float kMaxSkinWeight = 32.0f;
+
+// w at a bind-space point (see SkinWeightGrid).
+inline float skinWeightAt(const SkinWeightGrid& g, const glm::vec3& p) {
+  if (g.n < 2) return 1.0f;
+  const float last = static_cast<float>(g.n - 1);
+  const glm::vec3 u = glm::clamp((p - g.box.min) / (g.box.max - g.box.min) * last, glm::vec3(0.0f),
+                                 glm::vec3(last));
+  const glm::ivec3 i = glm::min(glm::ivec3(u), glm::ivec3(g.n - 2));
+  const glm::vec3 t = u - glm::vec3(i);
+  const auto n = static_cast<std::size_t>(g.n);
+  const auto at = [&](int dx, int dy, int dz) {
+    return g
+        .values[(static_cast<std::size_t>(i.z + dz) * n + static_cast<std::size_t>(i.y + dy)) * n +
+                static_cast<std::size_t>(i.x + dx)];
+  };
+  const auto lerp = [](float a, float b, float s) { return a + s * (b - a); };
+  const float y0 =
+      lerp(lerp(at(0, 0, 0), at(1, 0, 0), t.x), lerp(at(0, 1, 0), at(1, 1, 0), t.x), t.y);
+  const float y1 =
+      lerp(lerp(at(0, 0, 1), at(1, 0, 1), t.x), lerp(at(0, 1, 1), at(1, 1, 1), t.x), t.y);
+  return lerp(y0, y1, t.z);
+}
+
 struct Primitive {
   std::string name;  // e.g. "l_forearm" (unique within the set)
   PrimitiveRole role = PrimitiveRole::kLimb;
@@ -51,6 +90,7 @@ struct Primitive {
   Elasticity elasticity = Elasticity::kElastic;
   float time_constant = 0.5f;  // viscoelastic recovery time, seconds (> 0)
   bool collides = true;        // takes part in collisions (bone primitives do not)
+  SkinWeightGrid skin_weight;  // filled by calibration (calibrateModel)
 };
 
 struct PrimitiveSet {
@@ -76,6 +116,15 @@ struct CombinationGraph {
   // Derived by finalizeGraph (not stored): nprim x nprim collision matrix.
   int primitive_count = 0;
   std::vector<std::uint8_t> collide_matrix;
+  std::vector<std::uint8_t> neighbour_matrix;  // nprim x nprim: joined through a joint
+
+  // Whether i and j are joined through a joint primitive: the two limbs of a blend, or a
+  // joint and one of its limbs.
+  bool neighbours(int i, int j) const {
+    return neighbour_matrix[static_cast<std::size_t>(i) *
+                                static_cast<std::size_t>(primitive_count) +
+                            static_cast<std::size_t>(j)] != 0;
+  }
 
   bool collides(int i, int j) const {
     return collide_matrix[static_cast<std::size_t>(i) * static_cast<std::size_t>(primitive_count) +

@@ -2,6 +2,8 @@
 
 #include <cassert>
 
+#include <glm/gtc/matrix_inverse.hpp>
+
 namespace vistel {
 
 PosedPrimitive posePrimitive(const Primitive& p, const glm::mat4& xform) {
@@ -16,6 +18,11 @@ PosedPrimitive posePrimitive(const Primitive& p, const glm::mat4& xform) {
   out.reach = metricReach(out.shape, p.r_out);
   out.role = p.role;
   out.collides = p.collides;
+  if (p.skin_weight.n >= 2) {
+    out.skin_weight = &p.skin_weight;
+    out.max_skin_weight = p.skin_weight.max_value;
+    out.to_bind = glm::affineInverse(xform);
+  }
   return out;
 }
 

@@ -25,6 +25,10 @@ struct PosedPrimitive {
   float reach = 0.0f;        // metres from the skeleton to the support's edge
   PrimitiveRole role = PrimitiveRole::kLimb;
   bool collides = true;
+  const SkinWeightGrid* skin_weight = nullptr;  // its Primitive's (null: none); the set must
+                                                // outlive the posed copy
+  float max_skin_weight = 1.0f;                 // the grid's largest value
+  glm::mat4 to_bind{1.0f};                      // world -> bind-pose model space
 };
 
 // One body's posed primitives (sized once from its PrimitiveSet; reused every frame).
@@ -61,6 +65,13 @@ inline float primitiveField(const PosedPrimitive& prim, const glm::vec3& p,
   const float f = densityValueSquared(prim.density, u, gradient != nullptr ? &fu : nullptr);
   if (gradient != nullptr) *gradient = (2.0f * prim.weight * fu * s2) * d;
   return prim.weight * f;
+}
+
+// w_i(p): the calibration weight of the primitive's own skin near world point p (1 without
+// a grid). A partner vertex meets that skin where w_i F_i = T.
+inline float skinWeight(const PosedPrimitive& prim, const glm::vec3& p) {
+  if (prim.skin_weight == nullptr) return 1.0f;
+  return skinWeightAt(*prim.skin_weight, glm::vec3(prim.to_bind * glm::vec4(p, 1.0f)));
 }
 
 // Whether p lies in the primitive's world box (a cheap reject before primitiveField).

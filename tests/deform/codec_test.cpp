@@ -27,7 +27,11 @@ TEST(Codec, RoundTripIsBitIdentical) {
     EXPECT_EQ(a.shape.length, b.shape.length);
     EXPECT_EQ(a.r_in, b.r_in);
     EXPECT_EQ(a.weight, b.weight);
+    EXPECT_EQ(a.skin_weight.n, b.skin_weight.n);
+    EXPECT_EQ(a.skin_weight.values, b.skin_weight.values);
+    EXPECT_EQ(a.skin_weight.max_value, b.skin_weight.max_value);
   }
+  EXPECT_GT(m.primitives.items[1].skin_weight.n, 0) << "the forearm defines vertices: a grid";
   EXPECT_EQ(back->graph.collide_matrix, m.graph.collide_matrix);
   EXPECT_EQ(back->calibration.w, m.calibration.w);
   EXPECT_EQ(back->calibration.ring, m.calibration.ring);
@@ -70,6 +74,15 @@ TEST(Codec, CorruptValuesAreRejectedWithReasons) {
     ImplicitModel m = arm->model;
     m.primitives.items[0].r_in = std::nanf("");
     EXPECT_FALSE(decodeImplicitModel(encodeImplicitModel(m), 3, nv).ok());
+  }
+  {
+    ImplicitModel m = arm->model;
+    ASSERT_FALSE(m.primitives.items[1].skin_weight.values.empty());
+    m.primitives.items[1].skin_weight.values[3] = 0.0f;
+    const auto r = decodeImplicitModel(encodeImplicitModel(m), 3, nv);
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().message.find("skin weight sample out of range"), std::string::npos)
+        << r.error().message;
   }
   {
     ImplicitModel m = arm->model;

@@ -42,16 +42,22 @@ TEST(Contact, SoftBodiesShareOneSurface) {
   for (std::size_t v = 0; v < arm->mesh.positions.size(); ++v) {
     if (arm->state.contact_body[v] != 1) continue;
     ++arm_contacts;
+    // One surface: w_v D_v = w_i F_i, the partner's field scaled by its skin weight (taken
+    // where the vertex started).
     const glm::vec3 p = arm->state.positions[v];
-    const float d = vertexDensity(arm->model, arm->posed, static_cast<int>(v), p);
-    EXPECT_LT(std::abs(d - primitiveField(ball_prim, p)), 1e-4f) << "arm vertex " << v;
+    const float d =
+        arm->model.calibration.w[v] * vertexDensity(arm->model, arm->posed, static_cast<int>(v), p);
+    const float f = skinWeight(ball_prim, arm->rigid_pos[v]) * primitiveField(ball_prim, p);
+    EXPECT_LT(std::abs(d - f), 1e-4f) << "arm vertex " << v;
   }
   for (std::size_t v = 0; v < ball->mesh.positions.size(); ++v) {
     if (ball->state.contact_body[v] != 0) continue;
     ++ball_contacts;
     const glm::vec3 p = ball->state.positions[v];
-    const float d = vertexDensity(ball->model, ball->posed, static_cast<int>(v), p);
-    EXPECT_LT(std::abs(d - primitiveField(fore, p)), 1e-4f) << "ball vertex " << v;
+    const float d = ball->model.calibration.w[v] *
+                    vertexDensity(ball->model, ball->posed, static_cast<int>(v), p);
+    const float f = skinWeight(fore, ball->rigid_pos[v]) * primitiveField(fore, p);
+    EXPECT_LT(std::abs(d - f), 1e-4f) << "ball vertex " << v;
   }
   EXPECT_GT(arm_contacts, 5);
   EXPECT_GT(ball_contacts, 5);

@@ -183,6 +183,73 @@ TEST(RealAvatars, MakehumanClipSelfContact) {
   if (checked == 0) GTEST_SKIP() << "no shared clip found";
 }
 
+// The primitives' skin weight grids follow the weights of the skin they define, so that a
+// partner meets that skin and not the primitive's raw iso-surface (MakeHuman's head skin
+// lies at w_v from 0.6 to over 3: its face is far outside the head's capsule).
+TEST(RealAvatars, MakehumanSkinWeightsFollowTheSkin) {
+  VISTEL_MAKEHUMAN(a);
+  auto b = bodyOf(*a);
+  const Calibration& c = b->model.calibration;
+  PosedPrimitives rest;
+  std::vector<glm::mat4> identity(static_cast<std::size_t>(b->skeleton.jointCount()),
+                                  glm::mat4(1.0f));
+  posePrimitives(b->model.primitives, identity, rest);
+  std::vector<float> error, spread;
+  for (std::size_t v = 0; v < c.w.size(); ++v) {
+    if (c.vertex_class[v] == VertexClass::kFree) continue;
+    const PosedPrimitive& p = rest.items[static_cast<std::size_t>(c.prims[v][0])];
+    ASSERT_NE(p.skin_weight, nullptr) << "vertex " << v;
+    const float w = std::clamp(c.w[v], kMinSkinWeight, kMaxSkinWeight);
+    error.push_back(std::abs(skinWeight(p, b->mesh.positions[v]) - w) / w);
+    spread.push_back(std::abs(w - 1.0f) / w);  // what a grid of ones would miss
+  }
+  const auto median = [](std::vector<float> x) {
+    std::nth_element(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2), x.end());
+    return x[x.size() / 2];
+  };
+  std::printf("makehuman skin weights: median relative error %.3f (w = 1 everywhere: %.3f)\n",
+              median(error), median(spread));
+  EXPECT_LT(median(error), 0.1f);
+  EXPECT_LT(median(error), 0.5f * median(spread));
+}
+
+// Frames of the shared clip 131_03 (scaled) where the right hand rests on the face: played
+// in order (warm starts carry over, as in a client), every frame where the rigid hand sinks
+// 1 cm or more into the head meets it without penetration after deformation.
+TEST(RealAvatars, MakehumanHandMeetsHead) {
+  VISTEL_MAKEHUMAN(a);
+  VISTEL_REQUIRE_SHARED(clip_path, "mocap/cmu/scaled_131_03.bvh");
+  auto b = bodyOf(*a);
+  const Part hands = part(*b, {"l_hand", "r_hand"});
+  const Part head = part(*b, {"head"});
+  Result<MotionClip> clip = loadBvh(clip_path);
+  ASSERT_TRUE(clip.ok()) << clip.error().message;
+  const Skeleton cs = clipSkeleton(*clip);
+  Result<const JointMap*> cmap = selectJointMap(a->maps, cs);
+  ASSERT_TRUE(cmap.ok()) << cmap.error().message;
+  Result<Retargeter> rt = Retargeter::create(cs, **cmap, b->skeleton, *a->map);
+  ASSERT_TRUE(rt.ok()) << rt.error().message;
+  Posture src;
+  int deep = 0;
+  for (int frame = 630; frame <= 666; frame += 4) {
+    samplePosture(*clip, frame, src);
+    rt->apply(src, b->posture);
+    test::Scene scene;
+    scene.bodies = {b.get()};
+    scene.step(frame / 120.0);
+    const auto [rigid, deformed] = penetration(*b, hands, head);
+    std::printf(
+        "131_03 frame %d: hand/head penetration rigid %.4f m, deformed %.4f m; contact %d; "
+        "unsolved %d\n",
+        frame, rigid, deformed, b->state.counters.contact_vertices,
+        b->state.counters.unsolved_vertices);
+    if (rigid < 0.01f) continue;
+    ++deep;
+    EXPECT_LE(deformed, 0.001f) << "frame " << frame;
+  }
+  EXPECT_GE(deep, 5) << "frames where the hand sinks 1 cm into the head";
+}
+
 // Replaying a clip with a ball gives the same deformed vertices with 1 and 2 threads.
 std::uint64_t replayMakehuman(const Avatar& a, TaskPool* pool) {
   auto b = bodyOf(a);
