@@ -614,7 +614,8 @@ RootResult solveVertex(VertexProblem& vp, glm::vec3& dir, float s_start, float g
         *dg = -c.omega * glm::dot(gf, inward);
         return c.iso - c.omega * f;
       };
-      const RootResult ro = findRoot(eval_out, 0.0f, reach, ropt);
+      // Within the partner's support: however deep the vertex, its way out is that short.
+      const RootResult ro = findRoot(eval_out, 0.0f, std::max(reach, c.prim->reach), ropt);
       cnt.evaluations += 1 + ro.iterations;
       cnt.iterations += 1 + ro.iterations;
       if (ro.found && (!rh.found || std::abs(ro.s) < std::abs(rh.s - res.s))) {
