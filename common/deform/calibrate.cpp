@@ -9,13 +9,16 @@
 
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/Sparse>
-#include <glm/gtx/component_wise.hpp>
 
 #include "common/deform/posed_primitives.hpp"
 #include "common/deform/vertex_field.hpp"
 
 namespace vistel {
 namespace {
+
+// Skin vertices whose ray keys share a sample with a vertex this much farther from the
+// skeleton (metres) are a deeper layer (see fitSkinWeights).
+constexpr float kLayerGap = 0.005f;
 
 // Field slope at a primitive's surface (per metre), for free vertices it owns.
 float surfaceSlope(const PrimitiveSet& set, const PosedPrimitive& p, const Primitive& q) {
@@ -49,16 +52,15 @@ void fitSkinWeights(ImplicitModel& model, std::span<const glm::vec3> pos, int sa
     const auto index = [n](int x, int y, int z) {
       return static_cast<Eigen::Index>((z * n + y) * n + x);
     };
-    // Least squares: the trilinear interpolation reproduces w_v at every own vertex (and
-    // along its ray just above and beneath it), and neighbouring samples agree (a small membrane
-    // term that also fills samples no vertex is near). Normal equations, solved by conjugate
-    // gradients from w = 1.
+    // Least squares: the trilinear interpolation reproduces w_v at every own vertex's key
+    // (where its ray from the skeleton crosses the lookup shell, see skinWeightKey), and
+    // neighbouring samples agree (a small membrane term that also fills samples no key is
+    // near). Normal equations, solved by conjugate gradients from w = 1.
     std::vector<Eigen::Triplet<double>> terms;
     Eigen::VectorXd rhs = Eigen::VectorXd::Zero(cells);
     const glm::vec3 size = g.box.max - g.box.min;
     const float last = static_cast<float>(n - 1);
     const PosedPrimitive rest = posePrimitive(p, glm::mat4(1.0f));
-    const float cell = glm::compMin(size) / last;
     const auto add = [&](const glm::vec3& q, double value, double weight) {
       const glm::vec3 u =
           glm::clamp((q - g.box.min) / size * last, glm::vec3(0.0f), glm::vec3(last));
@@ -77,20 +79,26 @@ void fitSkinWeights(ImplicitModel& model, std::span<const glm::vec3> pos, int sa
         for (int b = 0; b < 8; ++b) terms.emplace_back(idx[a], idx[b], weight * wt[a] * wt[b]);
       }
     };
-    for (const std::uint32_t v : own) {
-      add(pos[v], c.w[v], 1.0);
-      // The same weight a little above and beneath the skin along the ray from the
-      // skeleton, so that a partner point just inside the body meets this skin's weight
-      // rather than the interior's blend of all of them.
+    // A partner meets the outermost skin on each ray: where rays of several layers share a
+    // sample (lips over teeth, lids over eyes), the deeper layers are left out.
+    std::vector<glm::vec3> keys(own.size());
+    std::vector<float> depth(own.size());
+    std::vector<float> outermost(static_cast<std::size_t>(cells), 0.0f);
+    const auto nearest = [&](const glm::vec3& q) {
+      const glm::ivec3 at = glm::clamp(glm::ivec3(glm::round((q - g.box.min) / size * last)),
+                                       glm::ivec3(0), glm::ivec3(n - 1));
+      return static_cast<std::size_t>(index(at.x, at.y, at.z));
+    };
+    for (std::size_t k = 0; k < own.size(); ++k) {
+      keys[k] = skinWeightKey(rest, pos[own[k]]);
       float scale;
-      const glm::vec3 d = skeletonOffset(rest.shape, pos[v], scale);
-      const float depth = glm::length(d);
-      if (!(depth > 0.0f)) continue;
-      const glm::vec3 out = d / depth;
-      for (const float k : {-2.0f, -1.0f, 1.0f}) {
-        const float t = std::max(k * cell, -0.8f * depth);
-        add(pos[v] + t * out, c.w[v], 0.5);
-      }
+      depth[k] = glm::length(skeletonOffset(rest.shape, pos[own[k]], scale));  // metres
+      float& o = outermost[nearest(keys[k])];
+      o = std::max(o, depth[k]);
+    }
+    for (std::size_t k = 0; k < own.size(); ++k) {
+      if (depth[k] < outermost[nearest(keys[k])] - kLayerGap) continue;
+      add(keys[k], c.w[own[k]], 1.0);
     }
     const double membrane = 1e-2 * static_cast<double>(own.size()) / static_cast<double>(cells);
     for (int z = 0; z < n; ++z) {

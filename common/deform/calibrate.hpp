@@ -44,7 +44,9 @@ Result<CalibrationReport> calibrateModel(ImplicitModel& model,
 // Fits every primitive's skin weight grid (Primitive::skin_weight) to the weights w_v of
 // the vertices it defines (limb and joint vertices with p0 = it): samples^3 values over its
 // support box at rest, by least squares so that the grid's trilinear interpolation
-// reproduces w_v at those vertices, with a small membrane term that keeps neighbouring
+// reproduces w_v at those vertices' keys (skinWeightKey: w is looked up where a point's ray
+// from the skeleton crosses a fixed shell, so it is constant along each ray), with a small
+// membrane term that keeps neighbouring
 // samples close and fills those no vertex is near; clamped to [kMinSkinWeight,
 // kMaxSkinWeight]. A primitive that defines no vertex gets none (w = 1). calibrateModel
 // calls it.

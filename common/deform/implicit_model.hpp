@@ -40,8 +40,10 @@ enum class Elasticity : std::uint8_t {
 // The calibration weights w_v of a primitive's own skin (its limb or joint vertices) as a
 // field around it in bind-pose model space: the skin that primitive makes lies where
 // w(P) F(P) = T, so a partner vertex meets that skin, not the raw iso-surface F = T
-// (which a fitted primitive misses by centimetres on a real face or hand). Trilinear over
-// n^3 samples spanning `box`, clamped at its faces; n = 0: 1 everywhere (exact primitives,
+// (which a fitted primitive misses by centimetres on a real face or hand). Looked up at a
+// point's key (skinWeightKey in posed_primitives.hpp: where its ray from the skeleton
+// crosses the shell at r_out / 2), so w is constant along each ray. Trilinear over n^3
+// samples spanning `box`, clamped at its faces; n = 0: 1 everywhere (exact primitives,
 // props).
 struct SkinWeightGrid {
   Bounds box;                 // bind-pose model space; min < max on every axis

@@ -67,11 +67,24 @@ inline float primitiveField(const PosedPrimitive& prim, const glm::vec3& p,
   return prim.weight * f;
 }
 
-// w_i(p): the calibration weight of the primitive's own skin near world point p (1 without
-// a grid). A partner vertex meets that skin where w_i F_i = T.
+// Where p's ray from the skeleton (from its closest skeleton point through p) crosses the
+// shell at skeleton distance r_out / 2: the point at which the primitive's skin weight is
+// looked up for p, so that the weight is constant along every ray (a partner point deep
+// inside meets the weight of the skin above it). p itself on the skeleton.
+inline glm::vec3 skinWeightKey(const PosedPrimitive& prim, const glm::vec3& p) {
+  float scale;
+  const glm::vec3 d = skeletonOffset(prim.shape, p, scale);
+  const float r = std::sqrt(glm::dot(d, d)) * scale * prim.inv_r_out;  // distance / r_out
+  if (!(r > 0.0f)) return p;
+  return p + (0.5f / r - 1.0f) * d;
+}
+
+// w_i(p): the calibration weight of the primitive's own skin on p's ray from the skeleton
+// (1 without a grid). A partner vertex meets that skin where w_i F_i = T.
 inline float skinWeight(const PosedPrimitive& prim, const glm::vec3& p) {
   if (prim.skin_weight == nullptr) return 1.0f;
-  return skinWeightAt(*prim.skin_weight, glm::vec3(prim.to_bind * glm::vec4(p, 1.0f)));
+  const glm::vec3 key = skinWeightKey(prim, p);
+  return skinWeightAt(*prim.skin_weight, glm::vec3(prim.to_bind * glm::vec4(key, 1.0f)));
 }
 
 // Whether p lies in the primitive's world box (a cheap reject before primitiveField).
