@@ -348,21 +348,36 @@ void findCandidates(const Frame& fr, int v, const glm::vec3& p0,
       if ((entry & kAlwaysEntry) != 0 && !always) continue;  // another vertex's pair
     }
     if (!insideBox(col.cull, p0)) continue;
-    glm::vec3 gd;
-    const float d = skeletonDistance(col.posed->shape, p0, &gd);
-    if (d > col.cull_distance) continue;
+    // The skeleton distance d and its gradient (as skeletonDistance), keeping the offset.
     const PosedPrimitive& prim = *col.posed;
+    float scale;
+    const glm::vec3 offset = skeletonOffset(prim.shape, p0, scale);
+    const float len = std::sqrt(glm::dot(offset, offset));
+    const float d = len * scale;
+    if (d > col.cull_distance) continue;
+    const glm::vec3 gd = len > 0.0f ? offset * (scale / len) : glm::vec3(0.0f);
     const float k_other = prim.stiffness;
+    const float r_near = std::max(d - margin * col.inv_unit, 0.0f) * prim.inv_r_out;
+    const float density_near = densityValue(prim.density, r_near);
+    const float lowest = lowestTerm(fr, col);
     // The partner field's scale: 1 for a rigid partner; the vertex's own weight for a
     // neighbouring part of its body (joined to one of its primitives through a joint: the
-    // two skins meet at a crease calibrated at rest); else the partner's skin weight.
+    // two skins meet at a crease calibrated at rest); else the partner's skin weight (first
+    // bounded by the grid's largest, which settles most colliders without a lookup).
     const bool neighbour = same && (always || (pr[0] >= 0 && graph.neighbours(pr[0], col.prim)) ||
                                     (pr[1] >= 0 && graph.neighbours(pr[1], col.prim)) ||
                                     (pr[2] >= 0 && graph.neighbours(pr[2], col.prim)));
-    const float omega = std::isinf(k_other) ? 1.0f : (neighbour ? w : skinWeight(prim, p0));
-    const float r_near = std::max(d - margin * col.inv_unit, 0.0f) * prim.inv_r_out;
-    const float x_near = omega * prim.weight * densityValue(prim.density, r_near) - iso;
-    if (!(x_near > lowestTerm(fr, col))) continue;
+    float omega = 1.0f;
+    if (!std::isinf(k_other)) {
+      if (neighbour) {
+        omega = w;
+      } else {
+        if (!(prim.max_skin_weight * prim.weight * density_near - iso > lowest)) continue;
+        omega = skinWeight(prim, p0, offset, scale);
+      }
+    }
+    const float x_near = omega * prim.weight * density_near - iso;
+    if (!(x_near > lowest)) continue;
     if (n == kMaxCandidates) {
       overflow = true;
       continue;
@@ -870,10 +885,23 @@ void passRelax(Frame& fr, int first, int last, DeformCounters& cnt) {
 
 // Step 3a: normals. Vertices untouched by deformation (and whose neighbours are too; a move
 // below kReshapeOffset counts as untouched) keep their rigid normals; the others get
-// area-weighted normals of the deformed faces.
-void passNormals(Frame& fr, int first, int last) {
+// area-weighted normals of the deformed faces. First the faces with a dirty vertex (each
+// once), then the vertices.
+void passFaceNormals(Frame& fr, int first, int last) {
   DeformState& st = *fr.st;
   const auto idx = fr.in->indices;
+  for (int face = first; face < last; ++face) {
+    const std::size_t f = 3u * static_cast<std::size_t>(face);
+    const std::uint32_t a = idx[f], b = idx[f + 1], c = idx[f + 2];
+    if ((st.dirty[a] | st.dirty[b] | st.dirty[c]) == 0) continue;
+    const glm::vec3& pa = st.positions[a];
+    st.face_cross[static_cast<std::size_t>(face)] =
+        glm::cross(st.positions[b] - pa, st.positions[c] - pa);
+  }
+}
+
+void passNormals(Frame& fr, int first, int last) {
+  DeformState& st = *fr.st;
   for (int v = first; v < last; ++v) {
     const auto vi = static_cast<std::size_t>(v);
     const bool dirty = st.dirty[vi] != 0;
@@ -882,11 +910,8 @@ void passNormals(Frame& fr, int first, int last) {
       continue;
     }
     glm::vec3 n(0.0f);
-    for (std::uint32_t k = st.vf_offsets[vi]; k < st.vf_offsets[vi + 1]; ++k) {
-      const std::size_t f = 3u * st.vf_faces[k];
-      const glm::vec3& a = st.positions[idx[f]];
-      n += glm::cross(st.positions[idx[f + 1]] - a, st.positions[idx[f + 2]] - a);
-    }
+    for (std::uint32_t k = st.vf_offsets[vi]; k < st.vf_offsets[vi + 1]; ++k)
+      n += st.face_cross[st.vf_faces[k]];
     const float len = glm::length(n);
     st.normals[vi] = len > 0.0f ? n / len : fr.in->rigid_normals[vi];
   }
@@ -1106,6 +1131,7 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
     if (named[p] != 0) st.always_prims.push_back(static_cast<std::int16_t>(p));
   }
   st.face_vertices.assign(indices.begin(), indices.end());
+  st.face_cross.assign(indices.size() / 3, glm::vec3(0.0f));
   // Vertex -> face adjacency.
   st.vf_offsets.assign(nv + 1, 0);
   for (const std::uint32_t i : indices) ++st.vf_offsets[i + 1];
@@ -1194,6 +1220,12 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
   }
 
   // Step 3: normals, then contacts and forces.
+  const int nface = static_cast<int>(st.face_cross.size());
+  const int face_chunks = (nface + fr.chunk - 1) / fr.chunk;
+  auto face_normals = [&](int c) {
+    passFaceNormals(fr, c * fr.chunk, std::min(nface, (c + 1) * fr.chunk));
+  };
+  parallelFor(pool, face_chunks, face_normals);
   auto normals = [&](int c) {
     const auto [b, e] = range(c);
     passNormals(fr, b, e);

@@ -163,6 +163,8 @@ struct DeformState {
                                                     // field's scale: its skin weight near
                                                     // the vertex, 1 for a rigid partner
   std::vector<std::uint8_t> dirty;                  // needs a new normal (nvert)
+  std::vector<glm::vec3> face_cross;                // twice the area-weighted normal of
+                                                    // faces with a dirty vertex (nface)
   std::vector<glm::vec3> relaxed;                   // relaxation pass output (nvert)
   std::vector<glm::vec3> directions;                // projection direction used (nvert)
   std::vector<glm::vec3> field_gradient;            // relaxed vertices: grad g where the last

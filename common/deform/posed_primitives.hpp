@@ -71,20 +71,33 @@ inline float primitiveField(const PosedPrimitive& prim, const glm::vec3& p,
 // shell at skeleton distance r_out / 2: the point at which the primitive's skin weight is
 // looked up for p, so that the weight is constant along every ray (a partner point deep
 // inside meets the weight of the skin above it). p itself on the skeleton.
-inline glm::vec3 skinWeightKey(const PosedPrimitive& prim, const glm::vec3& p) {
-  float scale;
-  const glm::vec3 d = skeletonOffset(prim.shape, p, scale);
+// The overload with p's skeleton offset d and its scale (skeletonOffset) already known.
+inline glm::vec3 skinWeightKey(const PosedPrimitive& prim, const glm::vec3& p, const glm::vec3& d,
+                               float scale) {
   const float r = std::sqrt(glm::dot(d, d)) * scale * prim.inv_r_out;  // distance / r_out
   if (!(r > 0.0f)) return p;
   return p + (0.5f / r - 1.0f) * d;
 }
+inline glm::vec3 skinWeightKey(const PosedPrimitive& prim, const glm::vec3& p) {
+  float scale;
+  const glm::vec3 d = skeletonOffset(prim.shape, p, scale);
+  return skinWeightKey(prim, p, d, scale);
+}
 
 // w_i(p): the calibration weight of the primitive's own skin on p's ray from the skeleton
-// (1 without a grid). A partner vertex meets that skin where w_i F_i = T.
+// (1 without a grid). A partner vertex meets that skin where w_i F_i = T. The overload
+// takes p's skeleton offset and scale when the caller has them.
+inline float skinWeight(const PosedPrimitive& prim, const glm::vec3& p, const glm::vec3& d,
+                        float scale) {
+  if (prim.skin_weight == nullptr) return 1.0f;
+  const glm::vec3 key = skinWeightKey(prim, p, d, scale);
+  return skinWeightAt(*prim.skin_weight, glm::vec3(prim.to_bind * glm::vec4(key, 1.0f)));
+}
 inline float skinWeight(const PosedPrimitive& prim, const glm::vec3& p) {
   if (prim.skin_weight == nullptr) return 1.0f;
-  const glm::vec3 key = skinWeightKey(prim, p);
-  return skinWeightAt(*prim.skin_weight, glm::vec3(prim.to_bind * glm::vec4(key, 1.0f)));
+  float scale;
+  const glm::vec3 d = skeletonOffset(prim.shape, p, scale);
+  return skinWeight(prim, p, d, scale);
 }
 
 // Whether p lies in the primitive's world box (a cheap reject before primitiveField).
