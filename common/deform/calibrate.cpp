@@ -45,7 +45,8 @@ void fitSkinWeights(ImplicitModel& model, std::span<const glm::vec3> pos, int sa
         own.push_back(v);
     }
     if (own.empty() || samples < 2) continue;
-    g.box = posePrimitive(p, glm::mat4(1.0f)).bounds;
+    const PosedPrimitive rest = posePrimitive(p, glm::mat4(1.0f));
+    g.box = rest.bounds;
     g.n = std::min(samples, kMaxSkinWeightSamples);
     const int n = g.n;
     const auto cells = static_cast<Eigen::Index>(n) * n * n;
@@ -60,8 +61,7 @@ void fitSkinWeights(ImplicitModel& model, std::span<const glm::vec3> pos, int sa
     Eigen::VectorXd rhs = Eigen::VectorXd::Zero(cells);
     const glm::vec3 size = g.box.max - g.box.min;
     const float last = static_cast<float>(n - 1);
-    const PosedPrimitive rest = posePrimitive(p, glm::mat4(1.0f));
-    const auto add = [&](const glm::vec3& q, double value, double weight) {
+    const auto add = [&](const glm::vec3& q, double value) {
       const glm::vec3 u =
           glm::clamp((q - g.box.min) / size * last, glm::vec3(0.0f), glm::vec3(last));
       const glm::ivec3 i0 = glm::min(glm::ivec3(u), glm::ivec3(n - 2));
@@ -75,8 +75,8 @@ void fitSkinWeights(ImplicitModel& model, std::span<const glm::vec3> pos, int sa
                 (dz != 0 ? t.z : 1.0f - t.z);
       }
       for (int a = 0; a < 8; ++a) {
-        rhs[idx[a]] += weight * wt[a] * value;
-        for (int b = 0; b < 8; ++b) terms.emplace_back(idx[a], idx[b], weight * wt[a] * wt[b]);
+        rhs[idx[a]] += wt[a] * value;
+        for (int b = 0; b < 8; ++b) terms.emplace_back(idx[a], idx[b], wt[a] * wt[b]);
       }
     };
     // A partner meets the outermost skin on each ray: where rays of several layers share a
@@ -90,15 +90,16 @@ void fitSkinWeights(ImplicitModel& model, std::span<const glm::vec3> pos, int sa
       return static_cast<std::size_t>(index(at.x, at.y, at.z));
     };
     for (std::size_t k = 0; k < own.size(); ++k) {
-      keys[k] = skinWeightKey(rest, pos[own[k]]);
       float scale;
-      depth[k] = glm::length(skeletonOffset(rest.shape, pos[own[k]], scale));  // metres
+      const glm::vec3 d = skeletonOffset(rest.shape, pos[own[k]], scale);
+      keys[k] = skinWeightKey(rest, pos[own[k]], d, scale);
+      depth[k] = glm::length(d);  // metres
       float& o = outermost[nearest(keys[k])];
       o = std::max(o, depth[k]);
     }
     for (std::size_t k = 0; k < own.size(); ++k) {
       if (depth[k] < outermost[nearest(keys[k])] - kLayerGap) continue;
-      add(keys[k], c.w[own[k]], 1.0);
+      add(keys[k], c.w[own[k]]);
     }
     const double membrane = 1e-2 * static_cast<double>(own.size()) / static_cast<double>(cells);
     for (int z = 0; z < n; ++z) {

@@ -610,6 +610,7 @@ RootResult solveVertex(VertexProblem& vp, glm::vec3& dir, float s_start, float g
     const glm::vec3 p1 = p0 + res.s * dir;
     glm::vec3 inward;
     primitiveField(*c.prim, p1, &inward);
+    ++cnt.evaluations;
     const float len = glm::length(inward);
     const float exit = len > 0.0f ? x / (c.omega * len) : INFINITY;
     if (rh.found && std::abs(rh.s - res.s) <= std::max(kGrazeMinOffset, kGrazeFactor * exit)) {
