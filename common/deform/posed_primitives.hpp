@@ -70,18 +70,13 @@ inline float primitiveField(const PosedPrimitive& prim, const glm::vec3& p,
 // Where p's ray from the skeleton (from its closest skeleton point through p) crosses the
 // shell at skeleton distance r_out / 2: the point at which the primitive's skin weight is
 // looked up for p, so that the weight is constant along every ray (a partner point deep
-// inside meets the weight of the skin above it). p itself on the skeleton.
-// The overload with p's skeleton offset d and its scale (skeletonOffset) already known.
+// inside meets the weight of the skin above it). p itself on the skeleton. d and scale:
+// p's skeleton offset and its scale (skeletonOffset).
 inline glm::vec3 skinWeightKey(const PosedPrimitive& prim, const glm::vec3& p, const glm::vec3& d,
                                float scale) {
   const float r = std::sqrt(glm::dot(d, d)) * scale * prim.inv_r_out;  // distance / r_out
   if (!(r > 0.0f)) return p;
   return p + (0.5f / r - 1.0f) * d;
-}
-inline glm::vec3 skinWeightKey(const PosedPrimitive& prim, const glm::vec3& p) {
-  float scale;
-  const glm::vec3 d = skeletonOffset(prim.shape, p, scale);
-  return skinWeightKey(prim, p, d, scale);
 }
 
 // w_i(p): the calibration weight of the primitive's own skin on p's ray from the skeleton
