@@ -158,7 +158,7 @@ inline float evaluateTerms(VertexProblem& vp, const glm::vec3& p, glm::vec3& gra
   return g;
 }
 
-// The same, remembering the point and the gradient (see gradientAt).
+// The same, remembering the point and the gradient (see gradientNear).
 inline float evaluate(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
   const float g = evaluateTerms(vp, p, grad);
   vp.last_point = p;
@@ -166,13 +166,11 @@ inline float evaluate(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
   return g;
 }
 
-// The gradient of g at p: the last evaluation's when it was at p, else a new one.
-inline glm::vec3 gradientAt(VertexProblem& vp, const glm::vec3& p, DeformCounters& cnt) {
-  if (vp.last_point == p) return vp.last_gradient;
-  glm::vec3 grad;
-  evaluate(vp, p, grad);
-  ++cnt.evaluations;
-  return grad;
+// The gradient of g near p for the relaxation's tangent plane: the last evaluation's when it
+// was within `within` of p (a final Newton step, see RootOptions::final_step), else NaN.
+inline glm::vec3 gradientNear(const VertexProblem& vp, const glm::vec3& p, float within) {
+  const glm::vec3 d = vp.last_point - p;
+  return glm::dot(d, d) <= within * within ? vp.last_gradient : glm::vec3(NAN);
 }
 
 // Deepest hard-constraint violation at p: the rigid partner with the largest x, or -1.
@@ -579,7 +577,6 @@ RootResult solveVertex(VertexProblem& vp, glm::vec3& dir, float s_start, float g
   const float dg0 = glm::dot(grad, dir);
   res.found = std::abs(g) < ropt.tolerance || std::abs(g) < ropt.step_tolerance * std::abs(dg0);
   if (!res.found) {
-    iterated = true;
     auto eval = [&](float s, float* dg) {
       glm::vec3 gr;
       const float val = evaluate(vp, p0 + s * dir, gr);
@@ -589,6 +586,7 @@ RootResult solveVertex(VertexProblem& vp, glm::vec3& dir, float s_start, float g
     res = findRoot(eval, s_start, g, dg0, reach, ropt);
     cnt.evaluations += res.iterations;
     cnt.iterations += res.iterations;
+    if (res.iterations > 0) iterated = true;
   }
   // Rigid partners: a vertex inside one retreats onto its surface (x = 0).
   for (int round = 0; round < 2 && res.found; ++round) {
@@ -826,7 +824,7 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
     if (relax) {
       flags |= kVertexRelaxed;
       ++cnt.relaxed_vertices;
-      st.field_gradient[vi] = vp.last_point == st.positions[vi] ? vp.last_gradient : glm::vec3(NAN);
+      st.field_gradient[vi] = gradientNear(vp, st.positions[vi], opt.root.final_step);
     }
     st.flags[vi] = flags;
     cnt.max_offset = std::max(cnt.max_offset, std::abs(s_out));
@@ -879,7 +877,7 @@ void passRelax(Frame& fr, int first, int last, DeformCounters& cnt) {
     cnt.relax_iterations += local.iterations;
     if (res.found) {
       st.relaxed[vi] = q + res.s * nu;
-      st.field_gradient[vi] = vp.last_point == st.relaxed[vi] ? vp.last_gradient : glm::vec3(NAN);
+      st.field_gradient[vi] = gradientNear(vp, st.relaxed[vi], opt.root.final_step);
     }
   }
 }

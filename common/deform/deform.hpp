@@ -74,7 +74,9 @@ struct DeformCounters {
   std::int64_t iterations = 0;        // Step 2 root-finding iterations (evaluations after the
                                       // first), before relaxation
   std::int64_t relax_iterations = 0;  // iterations of the relaxation's final projections
-  int iterating_vertices = 0;         // vertices whose first evaluation was not a root
+  int iterating_vertices = 0;         // vertices that evaluated again after the first (a
+                                      // vertex within a final Newton step of its root at the
+                                      // first evaluation takes that step and does not count)
   int unsolved_vertices = 0;          // no root within reach: left at the rigid position
   int gradient_vertices = 0;          // projected along -grad F (normal disagreed)
   int relaxed_vertices = 0;           // moved by tangential relaxation
@@ -167,7 +169,8 @@ struct DeformState {
                                                     // faces with a dirty vertex (nface)
   std::vector<glm::vec3> relaxed;                   // relaxation pass output (nvert)
   std::vector<glm::vec3> directions;                // projection direction used (nvert)
-  std::vector<glm::vec3> field_gradient;            // relaxed vertices: grad g where the last
+  std::vector<glm::vec3> field_gradient;            // relaxed vertices: grad g where (or within
+                                                    // a final Newton step of where) the last
                                                     // solve left them (NaN: not known)
   std::vector<DeformCounters> chunk_counters;
 };

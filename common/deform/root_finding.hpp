@@ -24,6 +24,10 @@ struct RootOptions {
                                  // from the origin carry ~1e-7 m of rounding, i.e. |g| of
                                  // ~1e-5 in a steep field, even on the surface)
   float first_step = 1e-3f;      // smallest search step before bracketing (metres)
+  float final_step = 1e-4f;      // a Newton step shorter than this (metres) is taken without
+                                 // evaluating again: its error is about g''/(2 g') times its
+                                 // square, well below step_tolerance in a field of centimetre
+                                 // features
   int max_iterations = 40;
 };
 
@@ -48,6 +52,11 @@ RootResult findRoot(Eval&& eval, float s0, float g0, float dg0, float s_max,
            (std::isfinite(dgv) && std::abs(gv) < opt.step_tolerance * std::abs(dgv));
   };
   if (converged(g, dg)) {
+    r.found = true;
+    return r;
+  }
+  if (std::isfinite(dg) && std::abs(g) < opt.final_step * std::abs(dg)) {
+    r.s = std::clamp(s - g / dg, -s_max, s_max);
     r.found = true;
     return r;
   }
@@ -109,6 +118,18 @@ RootResult findRoot(Eval&& eval, float s0, float g0, float dg0, float s_max,
     if (converged(g, dg)) {
       r.found = true;
       return r;
+    }
+    if (std::isfinite(dg) && std::abs(g) < opt.final_step * std::abs(dg)) {
+      // The last Newton step, unless a known point of the other sign lies before its end
+      // (a kink may lie between).
+      const float s_newton = s - g / dg;
+      const bool other = g > 0.0f ? have_neg : have_pos;
+      const float s_other = g > 0.0f ? s_neg : s_pos;
+      if (!other || (s_newton - s) * (s_other - s_newton) > 0.0f) {
+        r.s = std::clamp(s_newton, -s_max, s_max);
+        r.found = true;
+        return r;
+      }
     }
     // Update the bracket (Illinois: after two false-position hits on the same side, halve
     // the kept end's value).

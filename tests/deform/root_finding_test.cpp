@@ -63,6 +63,30 @@ TEST(RootFinding, WarmStartNearTheRootTakesFewIterations) {
   EXPECT_LE(warm.iterations, cold.iterations);
 }
 
+TEST(RootFinding, AShortLastNewtonStepIsTakenWithoutAnotherEvaluation) {
+  // Smooth, root at 0.0123; g'' / g' is about 3 / m here, so a 50 um Newton step lands
+  // within about 3 / 2 * (50 um)^2 ~ 4 nm of the root.
+  int evals = 0;
+  auto smooth = [&](float s, float* dg) {
+    ++evals;
+    *dg = -3.0f * std::cos(3.0f * (s - 0.0123f) + 0.5f);
+    return -(std::sin(3.0f * (s - 0.0123f) + 0.5f) - std::sin(0.5f));
+  };
+  RootOptions opt;
+  RootResult r = findRoot(smooth, 0.0123f + 5e-5f, 0.2f, opt);
+  ASSERT_TRUE(r.found);
+  EXPECT_EQ(evals, 1);
+  EXPECT_EQ(r.iterations, 0);
+  EXPECT_NEAR(r.s, 0.0123f, 1e-7f);
+  // Without the final step the same start evaluates again.
+  evals = 0;
+  opt.final_step = 0.0f;
+  r = findRoot(smooth, 0.0123f + 5e-5f, 0.2f, opt);
+  ASSERT_TRUE(r.found);
+  EXPECT_GE(evals, 2);
+  EXPECT_NEAR(r.s, 0.0123f, 2e-6f);
+}
+
 TEST(RootFinding, NoRootWithinReachIsReported) {
   auto g = [](float s, float* dg) {
     *dg = 0.0f;
