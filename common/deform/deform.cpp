@@ -318,7 +318,6 @@ void findCandidates(const Frame& fr, int v, const glm::vec3& p0,
   bool overflow = false;
   float best_depth = 0.0f;
   float best_pressure = 0.0f;
-  const float k_self = ownStiffness(fr, v);
   const std::uint32_t pair_begin = cal.pair_offsets[vi];
   const std::uint32_t pair_end = cal.pair_offsets[vi + 1];
   float* reaches = &st.cand_reach[vi * kMaxCandidates];
@@ -332,6 +331,7 @@ void findCandidates(const Frame& fr, int v, const glm::vec3& p0,
   for (const std::uint16_t entry : list) {
     const int c = entry & ~kAlwaysEntry;
     DeformState::Collider& col = st.colliders[static_cast<std::size_t>(c)];
+    if (!insideBox(col.cull, p0)) continue;
     const bool same = col.body == fr.self;
     float iso = m.primitives.iso;
     bool always = false;
@@ -345,7 +345,6 @@ void findCandidates(const Frame& fr, int v, const glm::vec3& p0,
       }
       if ((entry & kAlwaysEntry) != 0 && !always) continue;  // another vertex's pair
     }
-    if (!insideBox(col.cull, p0)) continue;
     // The skeleton distance d and its gradient (as skeletonDistance), keeping the offset.
     const PosedPrimitive& prim = *col.posed;
     float scale;
@@ -397,7 +396,7 @@ void findCandidates(const Frame& fr, int v, const glm::vec3& p0,
     const float depth = gn > 0.0f ? x / gn : 0.0f;
     if (depth > best_depth && depth > kMinContactDepth) {
       best_depth = depth;
-      best_pressure = effectiveStiffness(k_self, k_other) * depth;
+      best_pressure = effectiveStiffness(ownStiffness(fr, v), k_other) * depth;
     }
   }
   st.cand_count[vi] = static_cast<std::uint8_t>(n | (overflow ? 0x80 : 0));
@@ -490,6 +489,18 @@ void passPenetration(Frame& fr, int first, int last) {
         st.patch_always.data() + st.patch_always_offsets[static_cast<std::size_t>(q)],
         st.patch_always_offsets[static_cast<std::size_t>(q) + 1] -
             st.patch_always_offsets[static_cast<std::size_t>(q)]);
+    const std::array<std::int16_t, 4> key = cal.prims[st.order[b]];
+    bool any = false;  // any collider for the patch at all (before the box is needed)
+    for (std::size_t k = 0; k < 3 && !any; ++k) {
+      const auto o = static_cast<std::size_t>(key[k]);
+      any = key[k] >= 0 && st.prim_collider_offsets[o + 1] > st.prim_collider_offsets[o];
+    }
+    for (std::size_t k = 0; k < always.size() && !any; ++k)
+      any = st.always_collider[static_cast<std::size_t>(always[k])] >= 0;
+    if (!any) {
+      for (std::uint32_t i = b; i < e; ++i) clear(st.order[i]);
+      continue;
+    }
     Bounds box{pos[st.order[b]], pos[st.order[b]]};
     float offset_max = 0.0f;
     for (std::uint32_t i = b; i < e; ++i) {
@@ -498,7 +509,6 @@ void passPenetration(Frame& fr, int first, int last) {
       box.max = glm::max(box.max, pos[v]);
       offset_max = std::max(offset_max, std::abs(st.offset[v]));
     }
-    const std::array<std::int16_t, 4> key = cal.prims[st.order[b]];
     int n = listColliders(fr, {key[0], key[1], key[2], kNoPrimitive}, always, box, list);
     if (n > 0) n = keepReachable(fr, box, offset_max, list, n);
     if (n == 0) {
@@ -823,6 +833,8 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
                        (std::abs(s_out) > opt.relax_min_offset || (flags & kVertexGradient) != 0);
     if (relax) {
       flags |= kVertexRelaxed;
+      st.relax_list[static_cast<std::size_t>(first + cnt.relaxed_vertices)] =
+          static_cast<std::uint32_t>(v);
       ++cnt.relaxed_vertices;
       st.field_gradient[vi] = gradientNear(vp, st.positions[vi], opt.root.final_step);
     }
@@ -831,22 +843,23 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
   }
 }
 
-// One tangential relaxation pass over the flagged vertices of [first, last): move towards
-// the rest barycentre of the one-ring within the tangent plane, then project back onto
-// F = T along the outward field normal. Reads positions, writes relaxed.
-void passRelax(Frame& fr, int first, int last, DeformCounters& cnt) {
+// One tangential relaxation pass over the flagged vertices of a chunk (relax_list from
+// `first`, `count` of them): move towards the rest barycentre of the one-ring within the
+// tangent plane, then project back onto F = T along the outward field normal. Reads
+// positions, writes relaxed.
+void passRelax(Frame& fr, int first, int count, DeformCounters& cnt) {
   DeformState& st = *fr.st;
   const Calibration& cal = fr.model->calibration;
   const DeformOptions& opt = *fr.opt;
   VertexProblem vp;
-  for (int v = first; v < last; ++v) {
+  for (int k = 0; k < count; ++k) {
+    const std::uint32_t v = st.relax_list[static_cast<std::size_t>(first + k)];
     const auto vi = static_cast<std::size_t>(v);
-    if ((st.flags[vi] & kVertexRelaxed) == 0) continue;
     st.relaxed[vi] = st.positions[vi];
     const std::uint32_t r0 = cal.ring_offsets[vi];
     const std::uint32_t r1 = cal.ring_offsets[vi + 1];
     if (r0 == r1) continue;
-    gatherProblem(fr, v, true, vp);
+    gatherProblem(fr, static_cast<int>(v), true, vp);
     // Outward field normal at the current position.
     const glm::vec3 p = st.positions[vi];
     glm::vec3 grad = st.field_gradient[vi];  // from the solve that put the vertex at p
@@ -1099,6 +1112,7 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
   st.depth.assign(nv, 0.0f);
   st.flags.assign(nv, 0);
   st.relaxed.assign(nv, glm::vec3(0.0f));
+  st.relax_list.assign(nv, 0);
   st.cand_count.assign(nv, 0);
   st.dirty.assign(nv, 0);
   st.cand_collider.assign(nv * kMaxCandidates, 0);
@@ -1199,20 +1213,20 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
 
   // Relaxation passes (Jacobi: read positions, write relaxed, then copy back).
   for (int pass = 0; pass < opt.relax_passes; ++pass) {
+    // Each chunk's relaxed vertices are listed from its first vertex on (see passSolve).
     auto relax = [&](int c) {
-      const auto [b, e] = range(c);
-      passRelax(fr, b, e, st.chunk_counters[static_cast<std::size_t>(c)]);
+      DeformCounters& cnt = st.chunk_counters[static_cast<std::size_t>(c)];
+      passRelax(fr, range(c).first, cnt.relaxed_vertices, cnt);
     };
     parallelFor(pool, chunks, relax);
     auto copy = [&](int c) {
-      const auto [b, e] = range(c);
-      for (int v = b; v < e; ++v) {
-        const auto vi = static_cast<std::size_t>(v);
-        if ((st.flags[vi] & kVertexRelaxed) != 0) {
-          st.positions[vi] = st.relaxed[vi];
-          st.flags[vi] |= kVertexReshaped;
-          markReshaped(fr, v);
-        }
+      const int b = range(c).first;
+      const int n = st.chunk_counters[static_cast<std::size_t>(c)].relaxed_vertices;
+      for (int k = 0; k < n; ++k) {
+        const std::uint32_t v = st.relax_list[static_cast<std::size_t>(b + k)];
+        st.positions[v] = st.relaxed[v];
+        st.flags[v] |= kVertexReshaped;
+        markReshaped(fr, static_cast<int>(v));
       }
     };
     parallelFor(pool, chunks, copy);

@@ -168,6 +168,8 @@ struct DeformState {
   std::vector<glm::vec3> face_cross;                // twice the area-weighted normal of
                                                     // faces with a dirty vertex (nface)
   std::vector<glm::vec3> relaxed;                   // relaxation pass output (nvert)
+  std::vector<std::uint32_t> relax_list;            // (nvert) the vertices to relax, each
+                                                    // chunk's from its first vertex on
   std::vector<glm::vec3> directions;                // projection direction used (nvert)
   std::vector<glm::vec3> field_gradient;            // relaxed vertices: grad g where (or within
                                                     // a final Newton step of where) the last
