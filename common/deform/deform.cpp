@@ -96,12 +96,16 @@ struct VertexProblem {
   glm::vec3 smooth_gradient{0.0f};
   glm::vec3 last_point{NAN};  // where it was, and the gradient of g there
   glm::vec3 last_gradient{0.0f};
+  float own_side = 0.0f;  // joint vertices: w_v (F_p0 + F_p1 + F_bone) at the last evaluation
 };
 
 // w_v D_v(P) - T (or the free vertex's planar excess) and its gradient; also the outward
-// direction of the vertex's own field without the crease (DIFF's gradient is singular where
-// the two limbs' fields are equal): vp.smooth_gradient = grad(F_p0 + max(F_p1, F_p2) +
-// F_bone) w_v (for limb and free vertices the own gradient itself).
+// direction of the vertex's own side without the crease (DIFF's gradient is singular where
+// the two limbs' fields are equal): vp.smooth_gradient = grad(F_p0 + F_p1 + F_bone) w_v, and
+// vp.own_side = w_v (F_p0 + F_p1 + F_bone) (limb vertices: their own field; free vertices:
+// the plane's gradient, no own_side). Not the larger of the two limbs: where the opposite limb's
+// field is the larger it has come into the vertex's side, and its gradient points out of that limb,
+// not out of the vertex's skin (a torso vertex under a lowered arm would follow the arm).
 inline float ownExcess(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
   if (vp.cls == VertexClass::kFree) {
     grad = -vp.slope * vp.n0;
@@ -110,6 +114,7 @@ inline float ownExcess(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
   }
   glm::vec3 g0;
   float d = primitiveField(*vp.own[0], p, &g0);
+  float own_side = d;
   glm::vec3 smooth = g0;
   if (vp.cls == VertexClass::kJoint) {
     glm::vec3 ga, gb, gd;
@@ -117,16 +122,20 @@ inline float ownExcess(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
     const float fb = primitiveField(*vp.own[2], p, &gb);
     d += diffField(fa, ga, fb, gb, vp.diff_exponent, &gd);
     g0 += gd;
-    smooth += fa >= fb ? ga : gb;
+    smooth += ga;
+    own_side += fa;
   }
   if (vp.own[3] != nullptr) {
     glm::vec3 gbone;
-    d += primitiveField(*vp.own[3], p, &gbone);
+    const float fbone = primitiveField(*vp.own[3], p, &gbone);
+    d += fbone;
     g0 += gbone;
     smooth += gbone;
+    own_side += fbone;
   }
   grad = vp.w * g0;
   vp.smooth_gradient = vp.w * smooth;
+  vp.own_side = vp.w * own_side;
   return vp.w * d - vp.iso;
 }
 
@@ -576,6 +585,27 @@ inline int deepestPartner(const VertexProblem& vp, const glm::vec3& p, float& x_
   return best;
 }
 
+// Whether a joint vertex's root p is still on its own side: there w_v (F_p0 + F_p1 +
+// F_bone), its own side without the opposite limb, keeps at least DeformOptions::
+// joint_own_side of `from`, its value where the projection started (or of T, when that was
+// more). Beyond its own side DIFF(F_p1, F_p2) is the opposite limb's field alone, so
+// w_v D_v = T is the opposite limb's surface, and with the opposite-limb contact term the
+// equation degenerates (g = w_v F_p0 + iso_pair - T, about 0, over the whole of the opposite
+// limb's field): a root there is not the vertex's. Uses the last evaluation when it was
+// within a final Newton step of p.
+inline bool ownSideHolds(const VertexProblem& vp, float from, const glm::vec3& p,
+                         const DeformOptions& opt) {
+  if (vp.cls != VertexClass::kJoint || opt.joint_own_side <= 0.0f) return true;
+  const glm::vec3 d = vp.last_point - p;
+  float at_p = vp.own_side;
+  if (!(glm::dot(d, d) <= opt.root.final_step * opt.root.final_step)) {
+    at_p = primitiveField(*vp.own[0], p) + primitiveField(*vp.own[1], p);
+    if (vp.own[3] != nullptr) at_p += primitiveField(*vp.own[3], p);
+    at_p *= vp.w;
+  }
+  return at_p >= opt.joint_own_side * std::min(from, vp.iso);
+}
+
 // Solves the soft equation along dir from s_start (first evaluation g, grad given), then
 // enforces the hard constraints (rigid partners: the vertex ends on their surface).
 RootResult solveVertex(VertexProblem& vp, glm::vec3& dir, float s_start, float g,
@@ -724,8 +754,9 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
     glm::vec3 grad;
     float g = evaluate(vp, vp.p0 + s_start * dir, grad);
     ++cnt.evaluations;
+    const float own_side_start = vp.own_side;
     // Project along -grad F when asked, or where the normal disagrees strongly with the
-    // own field's (crease-free) gradient; also when the normal finds no root.
+    // own side's (crease-free) gradient; also when the normal finds no root.
     const bool at_root = std::abs(g) < opt.root.tolerance;
     glm::vec3 smooth(0.0f);
     if (!at_root) smooth = vp.smooth_gradient;
@@ -758,6 +789,13 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
       ++cnt.gradient_vertices;
     }
     if (iterated) ++cnt.iterating_vertices;
+    // A joint vertex whose root left its own side stays where the skinning put it.
+    const bool held = res.found && !ownSideHolds(vp, own_side_start, vp.p0 + res.s * dir, opt);
+    if (held) {
+      res.s = 0.0f;
+      flags |= kVertexHeld;
+      ++cnt.held_vertices;
+    }
 
     float s_sol = res.found ? res.s : 0.0f;
     if (!res.found) {
@@ -828,7 +866,7 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
     } else {
       st.contact_body[vi] = -1;
     }
-    const bool relax = opt.relax_passes > 0 && (flags & kVertexUnsolved) == 0 &&
+    const bool relax = opt.relax_passes > 0 && (flags & (kVertexUnsolved | kVertexHeld)) == 0 &&
                        vp.cls == VertexClass::kJoint &&
                        (std::abs(s_out) > opt.relax_min_offset || (flags & kVertexGradient) != 0);
     if (relax) {
@@ -881,6 +919,7 @@ void passRelax(Frame& fr, int first, int count, DeformCounters& cnt) {
     glm::vec3 gq;
     const float g0 = evaluate(vp, q, gq);
     ++cnt.evaluations;
+    const float own_side_start = vp.own_side;
     vp.p0 = q;
     bool iterated = false;
     DeformCounters local;
@@ -888,7 +927,7 @@ void passRelax(Frame& fr, int first, int count, DeformCounters& cnt) {
         solveVertex(vp, nu, 0.0f, g0, gq, searchReach(vp), opt.root, local, iterated);
     cnt.evaluations += local.evaluations;
     cnt.relax_iterations += local.iterations;
-    if (res.found) {
+    if (res.found && ownSideHolds(vp, own_side_start, q + res.s * nu, opt)) {
       st.relaxed[vi] = q + res.s * nu;
       st.field_gradient[vi] = gradientNear(vp, st.relaxed[vi], opt.root.final_step);
     }
@@ -1255,6 +1294,7 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
     total.relax_iterations += k.relax_iterations;
     total.iterating_vertices += k.iterating_vertices;
     total.unsolved_vertices += k.unsolved_vertices;
+    total.held_vertices += k.held_vertices;
     total.gradient_vertices += k.gradient_vertices;
     total.contact_vertices += k.contact_vertices;
     total.candidate_overflow += k.candidate_overflow;

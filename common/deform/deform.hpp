@@ -46,14 +46,20 @@ enum class ProjectionMode : std::uint8_t {
 struct DeformOptions {
   ProjectionMode projection = ProjectionMode::kNormal;
   float gradient_switch_cos = 0.25f;  // use -grad F where cos(n, -grad F) is below this (the
-                                      // gradient of the vertex's own field without the
-                                      // crease term, whose gradient is singular on the
-                                      // crease); also used when the normal finds no root
+                                      // gradient of the vertex's own side: its joint, own
+                                      // limb and bone, without the crease term, whose
+                                      // gradient is singular on the crease, nor the opposite
+                                      // limb); also used when the normal finds no root
   RootOptions root;                   // tolerances of the per-vertex root-find
   bool collisions = true;             // false: own fields only (creases, bones)
   bool propagation = true;            // false: no bulge (the propagation zone's term is 0)
   bool self_propagation = false;      // bulges for self-contact too (two facing parts of
                                       // one body both bulge into the gap between them)
+  float joint_own_side = 0.3f;        // a joint vertex's root must lie where its own side
+                                      // (w_v times its joint, own limb and bone fields) keeps
+                                      // at least this fraction of its value at the start of
+                                      // the projection (at most T); else the vertex is held
+                                      // rigid (0: off)
   int relax_passes = 2;               // tangential relaxation passes (0: off)
   float relax_rate = 0.5f;            // fraction of the way to the rest barycentre per pass
   float relax_min_offset = 1e-3f;     // relax joint vertices that moved more than this (m)
@@ -78,6 +84,8 @@ struct DeformCounters {
                                       // vertex within a final Newton step of its root at the
                                       // first evaluation takes that step and does not count)
   int unsolved_vertices = 0;          // no root within reach: left at the rigid position
+  int held_vertices = 0;              // joint vertices whose root left their own side (see
+                                      // DeformOptions::joint_own_side): left rigid
   int gradient_vertices = 0;          // projected along -grad F (normal disagreed)
   int relaxed_vertices = 0;           // moved by tangential relaxation
   int contact_vertices = 0;           // on a contact surface
@@ -108,6 +116,7 @@ inline constexpr std::uint8_t kVertexGradient = 4;   // projected along -grad F
 inline constexpr std::uint8_t kVertexRelaxed = 8;    // moved by relaxation
 inline constexpr std::uint8_t kVertexContact = 16;   // on a contact surface
 inline constexpr std::uint8_t kVertexReshaped = 32;  // moved enough to need a new normal
+inline constexpr std::uint8_t kVertexHeld = 64;      // joint vertex held rigid (see held_vertices)
 inline constexpr int kMaxCandidates = 8;             // colliders per vertex
 
 // Everything that changes per frame for one deformed body; sized once by initDeformState.
