@@ -96,7 +96,7 @@ struct VertexProblem {
   glm::vec3 smooth_gradient{0.0f};
   glm::vec3 last_point{NAN};  // where it was, and the gradient of g there
   glm::vec3 last_gradient{0.0f};
-  float own_side = 0.0f;  // joint vertices: w_v (F_p0 + F_p1 + F_bone) at the last evaluation
+  float own_side = 0.0f;  // w_v (F_p0 + F_p1 + F_bone) at the last evaluation (see ownExcess)
 };
 
 // w_v D_v(P) - T (or the free vertex's planar excess) and its gradient; also the outward
