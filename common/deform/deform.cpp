@@ -625,8 +625,9 @@ RootResult solveVertex(VertexProblem& vp, glm::vec3& dir, float s_start, float g
     };
     res = findRoot(eval, s_start, g, dg0, reach, ropt);
     cnt.evaluations += res.iterations;
-    cnt.iterations += res.iterations;
-    if (res.iterations > 0) iterated = true;
+    const int steps = res.iterations + (res.final_newton ? 1 : 0);
+    cnt.iterations += steps;
+    if (steps > 0) iterated = true;
   }
   // Rigid partners: a vertex inside one retreats onto its surface (x = 0).
   for (int round = 0; round < 2 && res.found; ++round) {

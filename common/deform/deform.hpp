@@ -77,12 +77,12 @@ struct DeformInput {
 // Per-frame counters (reset by each deformSkin).
 struct DeformCounters {
   std::int64_t evaluations = 0;       // per-vertex function evaluations, all passes
-  std::int64_t iterations = 0;        // Step 2 root-finding iterations (evaluations after the
-                                      // first), before relaxation
+  std::int64_t iterations = 0;        // Step 2 root-finding iterations, before relaxation:
+                                      // the evaluations after the first, and a last Newton
+                                      // step taken without evaluating (RootOptions::
+                                      // final_step)
   std::int64_t relax_iterations = 0;  // iterations of the relaxation's final projections
-  int iterating_vertices = 0;         // vertices that evaluated again after the first (a
-                                      // vertex within a final Newton step of its root at the
-                                      // first evaluation takes that step and does not count)
+  int iterating_vertices = 0;         // vertices whose first evaluation was not a root
   int unsolved_vertices = 0;          // no root within reach: left at the rigid position
   int held_vertices = 0;              // joint vertices whose root left their own side (see
                                       // DeformOptions::joint_own_side): left rigid

@@ -33,7 +33,9 @@ struct RootOptions {
 
 struct RootResult {
   float s = 0.0f;
-  int iterations = 0;  // evaluations after the first
+  int iterations = 0;         // evaluations after the first
+  bool final_newton = false;  // ended with a Newton step shorter than final_step, not
+                              // evaluated (an iteration without an evaluation)
   bool found = false;
 };
 
@@ -57,6 +59,7 @@ RootResult findRoot(Eval&& eval, float s0, float g0, float dg0, float s_max,
   }
   if (std::isfinite(dg) && std::abs(g) < opt.final_step * std::abs(dg)) {
     r.s = std::clamp(s - g / dg, -s_max, s_max);
+    r.final_newton = true;
     r.found = true;
     return r;
   }
@@ -127,6 +130,7 @@ RootResult findRoot(Eval&& eval, float s0, float g0, float dg0, float s_max,
       const float s_other = g > 0.0f ? s_neg : s_pos;
       if (!other || (s_newton - s) * (s_other - s_newton) > 0.0f) {
         r.s = std::clamp(s_newton, -s_max, s_max);
+        r.final_newton = true;
         r.found = true;
         return r;
       }

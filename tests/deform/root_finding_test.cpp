@@ -77,12 +77,14 @@ TEST(RootFinding, AShortLastNewtonStepIsTakenWithoutAnotherEvaluation) {
   ASSERT_TRUE(r.found);
   EXPECT_EQ(evals, 1);
   EXPECT_EQ(r.iterations, 0);
+  EXPECT_TRUE(r.final_newton);
   EXPECT_NEAR(r.s, 0.0123f, 1e-7f);
   // Without the final step the same start evaluates again.
   evals = 0;
   opt.final_step = 0.0f;
   r = findRoot(smooth, 0.0123f + 5e-5f, 0.2f, opt);
   ASSERT_TRUE(r.found);
+  EXPECT_FALSE(r.final_newton);
   EXPECT_GE(evals, 2);
   EXPECT_NEAR(r.s, 0.0123f, 2e-6f);
 }
