@@ -9,9 +9,12 @@
 //     non-blending parts of the same body); Gascuel 1993 "An implicit formulation for
 //     precise contact modeling between flexible solids" for the penetration and
 //     propagation zones, with relative deformability and elastic memory (plastic,
-//     viscoelastic). Then a tangential relaxation of the moved joint vertices towards
-//     their rest barycentric positions and a final projection (Vaillant et al. 2013,
-//     "Implicit skinning: real-time skin deformation with contact modeling").
+//     viscoelastic). A joint vertex whose root lies beyond its own side (where DIFF is the
+//     opposite limb's field alone; see DeformOptions::joint_own_side) stays at P: a
+//     deliberate departure from DESIGN.md, whose equation degenerates there. Then a
+//     tangential relaxation of the moved joint vertices towards their rest barycentric
+//     positions and a final projection (Vaillant et al. 2013, "Implicit skinning:
+//     real-time skin deformation with contact modeling").
 //   Step 3: normals of the deformed skin, contact flags and areas, pressures and reaction
 //     forces per partner body.
 //
