@@ -818,7 +818,7 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
     // c = s_sol - s_free (dents only; bulges stay elastic).
     float s_out = s_sol;
     const Elasticity mode = vertexElasticity(fr, v);
-    if (mode != Elasticity::kElastic) {
+    if (mode != Elasticity::kElastic && !held) {  // a held vertex keeps its memory as it was
       float s_free = s_sol;
       if (vp.ncand > 0 && res.found) {
         vp.ncand = 0;
