@@ -8,8 +8,9 @@
 // keeps the root bracketed: a Newton step that leaves the bracket, or a vanishing
 // derivative, is replaced by an Illinois false-position step, and bisection breaks stalls.
 // Stops at |g| < tol, where the Newton step |g / g'| is below step_tol, or when the
-// bracket is narrower than step_tol. Header-only so the per-vertex function inlines; allocates
-// nothing.
+// bracket is narrower than step_tol; a Newton step below final_step is taken without
+// evaluating again (unless a known point of the other sign lies before its end). Header-only
+// so the per-vertex function inlines; allocates nothing.
 #pragma once
 
 #include <algorithm>
@@ -57,16 +58,24 @@ RootResult findRoot(Eval&& eval, float s0, float g0, float dg0, float s_max,
     r.found = true;
     return r;
   }
-  if (std::isfinite(dg) && std::abs(g) < opt.final_step * std::abs(dg)) {
-    r.s = std::clamp(s - g / dg, -s_max, s_max);
-    r.final_newton = true;
-    r.found = true;
-    return r;
-  }
   // Bracket ends: pos has g > 0, neg has g < 0 (values possibly Illinois-scaled).
   bool have_pos = g > 0.0f;
   bool have_neg = g < 0.0f;
   float s_pos = s, g_pos = g, s_neg = s, g_neg = g;
+  // The last Newton step from (s, g, dg) when it is short, unless a known point of the other
+  // sign lies before its end (a kink may lie between).
+  const auto final_newton = [&]() {
+    if (!std::isfinite(dg) || !(std::abs(g) < opt.final_step * std::abs(dg))) return false;
+    const float s_newton = s - g / dg;
+    const bool other = g > 0.0f ? have_neg : have_pos;
+    const float s_other = g > 0.0f ? s_neg : s_pos;
+    if (other && !((s_newton - s) * (s_other - s_newton) > 0.0f)) return false;
+    r.s = std::clamp(s_newton, -s_max, s_max);
+    r.final_newton = true;
+    r.found = true;
+    return true;
+  };
+  if (final_newton()) return r;
   int last_side = 0;
   bool false_position = false;
   float step = 0.0f;  // last search step (before bracketing)
@@ -122,19 +131,7 @@ RootResult findRoot(Eval&& eval, float s0, float g0, float dg0, float s_max,
       r.found = true;
       return r;
     }
-    if (std::isfinite(dg) && std::abs(g) < opt.final_step * std::abs(dg)) {
-      // The last Newton step, unless a known point of the other sign lies before its end
-      // (a kink may lie between).
-      const float s_newton = s - g / dg;
-      const bool other = g > 0.0f ? have_neg : have_pos;
-      const float s_other = g > 0.0f ? s_neg : s_pos;
-      if (!other || (s_newton - s) * (s_other - s_newton) > 0.0f) {
-        r.s = std::clamp(s_newton, -s_max, s_max);
-        r.final_newton = true;
-        r.found = true;
-        return r;
-      }
-    }
+    if (final_newton()) return r;
     // Update the bracket (Illinois: after two false-position hits on the same side, halve
     // the kept end's value).
     if (g > 0.0f) {
