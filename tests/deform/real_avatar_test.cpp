@@ -351,7 +351,9 @@ WaveMeasures playWave(const Avatar& a, const DeformOptions& options) {
 
 // Beyond its own side a shoulder joint vertex's equation is the torso's (DIFF(0, F_torso)):
 // it would follow the torso's field centimetres out or in and fold the skin over the
-// shoulder. Held where its root leaves its own side, the shoulders stay smooth.
+// shoulder. Held where its root leaves its own side, the shoulders fold far less (a dent
+// behind the raised shoulder remains: torso-side joint vertices that the skinning carries
+// out with the arm return to the torso's surface).
 TEST(RealAvatars, DefaultAvatarWaveKeepsTheShouldersSmooth) {
   const Avatar* a = test::realAvatar("default");
   ASSERT_NE(a, nullptr);
