@@ -553,9 +553,9 @@ Elasticity vertexElasticity(const Frame& fr, int v) {
                  : Elasticity::kElastic;
 }
 
+float searchReach(float own_reach) { return std::max(own_reach, 0.02f); }
 float searchReach(const VertexProblem& vp) {
-  const float r = vp.own[0] != nullptr ? vp.own[0]->reach : 0.05f;
-  return std::max(r, 0.02f);
+  return searchReach(vp.own[0] != nullptr ? vp.own[0]->reach : 0.05f);
 }
 
 // Marks vertex v and its one-ring as needing new normals (other chunks may mark the same
@@ -717,6 +717,104 @@ bool reprojectOnContact(VertexProblem& vp, float reach, const RootOptions& ropt,
   return true;
 }
 
+// Writes vertex v's solution s_sol along dir from p0, placed at s_out (its elastic memory
+// applied): the offset, the position (s_out snapped to 0 below kSnapOffset), the moved,
+// reshaped and contact flags (marking the ring for new normals), the contact partner (a
+// body, or -1 when not touching; a vertex held off its contact by memory is not touching)
+// and max_offset. Returns the snapped s_out.
+inline float writeSolved(const Frame& fr, int v, const glm::vec3& p0, const glm::vec3& dir,
+                         float s_sol, float s_out, std::uint8_t flags, int partner,
+                         DeformCounters& cnt) {
+  DeformState& st = *fr.st;
+  const auto vi = static_cast<std::size_t>(v);
+  if (std::abs(s_out) < kSnapOffset) s_out = 0.0f;
+  st.offset[vi] = s_sol;
+  st.directions[vi] = dir;
+  st.positions[vi] = p0 + s_out * dir;
+  if (s_out != 0.0f) flags |= kVertexMoved;
+  if (std::abs(s_out) > kReshapeOffset) {
+    flags |= kVertexReshaped;
+    markReshaped(fr, v);
+  }
+  if (partner >= 0 && s_out == s_sol) {
+    flags |= kVertexContact;
+    ++cnt.contact_vertices;
+    st.contact_body[vi] = static_cast<std::int16_t>(partner);
+  } else {
+    st.contact_body[vi] = -1;
+  }
+  st.flags[vi] = flags;
+  cnt.max_offset = std::max(cnt.max_offset, std::abs(s_out));
+  return s_out;
+}
+
+// Pass B's short way for the commonest solved vertex: a limb vertex of one primitive (no
+// bone) with no collider and no elastic memory, projected along its normal, whose normal
+// finds the root. Its equation is w_v F_p0 - T alone, so it skips gathering a problem.
+// Returns false, having changed nothing, where the full way is needed (the normal
+// disagrees with the field's gradient, or finds no root); otherwise the result is the full
+// way's, bit for bit.
+bool solveLoneLimb(const Frame& fr, int v, DeformCounters& cnt) {
+  const DeformState& st = *fr.st;
+  const Calibration& cal = fr.model->calibration;
+  const DeformOptions& opt = *fr.opt;
+  const auto vi = static_cast<std::size_t>(v);
+  const auto& pr = cal.prims[vi];
+  if (cal.vertex_class[vi] != VertexClass::kLimb || pr[3] >= 0 || pr[0] < 0 ||
+      st.cand_count[vi] != 0 || st.memory[vi] != 0.0f ||
+      opt.projection != ProjectionMode::kNormal || (st.flags[vi] & kVertexGradient) != 0) {
+    return false;
+  }
+  const PosedPrimitive& prim = fr.posed->items[static_cast<std::size_t>(pr[0])];
+  const float w = cal.w[vi];
+  const float iso = fr.model->primitives.iso;
+  const glm::vec3 p0 = fr.in->rigid_positions[vi];
+  const glm::vec3 dir = fr.in->rigid_normals[vi];
+  const auto eval = [&](float s, glm::vec3& grad) {
+    glm::vec3 g0;
+    const float d = primitiveField(prim, p0 + s * dir, &g0);
+    grad = w * g0;
+    return w * d - iso;
+  };
+  const float s_start = st.offset[vi];
+  glm::vec3 grad;
+  const float g = eval(s_start, grad);
+  const bool at_root = std::abs(g) < opt.root.tolerance;
+  const float gn = at_root ? 0.0f : glm::length(grad);
+  if (!at_root && gn > 0.0f && -glm::dot(dir, grad) / gn < opt.gradient_switch_cos) return false;
+  const float dg0 = glm::dot(grad, dir);
+  RootResult res;
+  res.s = s_start;
+  res.found = at_root || std::abs(g) < opt.root.step_tolerance * std::abs(dg0);
+  if (!res.found) {
+    const auto eval_line = [&](float s, float* dg) {
+      glm::vec3 gr;
+      const float val = eval(s, gr);
+      *dg = glm::dot(gr, dir);
+      return val;
+    };
+    res = findRoot(eval_line, s_start, g, dg0, searchReach(prim.reach), opt.root);
+    if (!res.found && gn > 0.0f) return false;
+  }
+  const int steps = res.iterations + (res.final_newton ? 1 : 0);
+  cnt.evaluations += 1 + res.iterations;
+  cnt.iterations += steps;
+  if (steps > 0) ++cnt.iterating_vertices;
+  std::uint8_t flags = 0;
+  float s_sol = 0.0f;
+  if (res.found) {
+    s_sol = res.s;
+  } else {
+    flags |= kVertexUnsolved;
+    ++cnt.unsolved_vertices;
+  }
+  // An inelastic body's free offset is its solution when nothing touches it (its memory
+  // stays 0, see passSolve).
+  if (vertexElasticity(fr, v) != Elasticity::kElastic) fr.st->free_offset[vi] = s_sol;
+  writeSolved(fr, v, p0, dir, s_sol, s_sol, flags, -1, cnt);
+  return true;
+}
+
 // Pass B: solve every vertex of [first, last).
 void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
   DeformState& st = *fr.st;
@@ -730,6 +828,7 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
     const bool fixed = (cal.rigid[vi] != 0 || cal.vertex_class[vi] == VertexClass::kFree) &&
                        st.memory[vi] == 0.0f && opt.projection == ProjectionMode::kNormal;
     const bool listed = (st.cand_count[vi] & 0x7F) != 0;
+    if (!fixed && solveLoneLimb(fr, v, cnt)) continue;
     if (listed || !fixed) gatherProblem(fr, v, true, vp);
     if (fixed && (!listed || vp.ncand == 0)) {
       st.offset[vi] = 0.0f;
@@ -803,14 +902,12 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
       flags |= kVertexUnsolved;
       ++cnt.unsolved_vertices;
     }
-    // Contact state at the solution.
-    bool touching = false;
+    // Contact state at the solution: the partner body touched, or -1.
     int partner = -1;
     if (res.found && vp.ncand > 0 && st.depth[vi] > 0.0f) {
       float x = 0.0f;
       const int c = deepestPartner(vp, vp.p0 + s_sol * dir, x);
       if (c >= 0 && x >= -kContactTolerance) {
-        touching = true;
         partner = st.colliders[static_cast<std::size_t>(vp.cand[c].collider)].body;
       }
     }
@@ -849,36 +946,17 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
       st.free_offset[vi] = s_free;
       if (m < 0.0f) s_out = s_free + std::min(m, c);
     }
-    if (std::abs(s_out) < kSnapOffset) s_out = 0.0f;
-
-    // Write the vertex.
-    st.offset[vi] = s_sol;
-    st.directions[vi] = dir;
-    st.positions[vi] = vp.p0 + s_out * dir;
-    if (s_out != 0.0f) flags |= kVertexMoved;
-    if (std::abs(s_out) > kReshapeOffset) {
-      flags |= kVertexReshaped;
-      markReshaped(fr, v);
-    }
-    if (touching && s_out == s_sol) {
-      flags |= kVertexContact;
-      ++cnt.contact_vertices;
-      st.contact_body[vi] = static_cast<std::int16_t>(partner);
-    } else {
-      st.contact_body[vi] = -1;
-    }
+    s_out = writeSolved(fr, v, vp.p0, dir, s_sol, s_out, flags, partner, cnt);
     const bool relax = opt.relax_passes > 0 && (flags & (kVertexUnsolved | kVertexHeld)) == 0 &&
                        vp.cls == VertexClass::kJoint &&
                        (std::abs(s_out) > opt.relax_min_offset || (flags & kVertexGradient) != 0);
     if (relax) {
-      flags |= kVertexRelaxed;
+      st.flags[vi] |= kVertexRelaxed;
       st.relax_list[static_cast<std::size_t>(first + cnt.relaxed_vertices)] =
           static_cast<std::uint32_t>(v);
       ++cnt.relaxed_vertices;
       st.field_gradient[vi] = gradientNear(vp, st.positions[vi], opt.root.final_step);
     }
-    st.flags[vi] = flags;
-    cnt.max_offset = std::max(cnt.max_offset, std::abs(s_out));
   }
 }
 
