@@ -243,6 +243,7 @@ void deformBench(benchmark::State& state, Scene* s) {
   DeformState ds;
   if (!initDeformState(s->model, s->avatar.skin.indices, ds).ok()) std::abort();
   std::int64_t iterations = 0, iterating = 0, unsolved = 0, held = 0, contact = 0, frames = 0;
+  std::int64_t smoothed = 0;
   std::int64_t evaluations = 0, rigid = 0, candidates = 0, relaxed = 0, relax_iterations = 0;
   const double dt = 1.0 / 30.0;
   for (auto _ : state) {
@@ -265,6 +266,7 @@ void deformBench(benchmark::State& state, Scene* s) {
       iterating += ds.counters.iterating_vertices;
       unsolved += ds.counters.unsolved_vertices;
       held += ds.counters.held_vertices;
+      smoothed += ds.counters.smoothed_vertices;
       contact += ds.counters.contact_vertices;
       evaluations += ds.counters.evaluations;
       rigid += ds.counters.rigid_vertices;
@@ -285,6 +287,7 @@ void deformBench(benchmark::State& state, Scene* s) {
   const double nf = static_cast<double>(std::max<std::int64_t>(frames, 1));
   state.counters["unsolved_per_frame"] = static_cast<double>(unsolved) / nf;
   state.counters["held_per_frame"] = static_cast<double>(held) / nf;
+  state.counters["smoothed_per_frame"] = static_cast<double>(smoothed) / nf;
   state.counters["contact_per_frame"] = static_cast<double>(contact) / nf;
   state.counters["evaluations_per_vertex"] = static_cast<double>(evaluations) / (nf * nv);
   state.counters["rigid_per_frame"] = static_cast<double>(rigid) / nf;

@@ -1013,6 +1013,65 @@ void passRelax(Frame& fr, int first, int count, DeformCounters& cnt) {
   }
 }
 
+// The last part of Step 2: smooths the corrections c = P' - P of the joint regions (see
+// the header and DeformOptions::smooth_passes). The vertices smoothed are those of the pool
+// (joint vertices and the free ones beside them) with no collider, so none in contact, that
+// moved or have a neighbour that moved (beyond them nothing spreads); each pass moves their
+// corrections smooth_rate of the way to the one-ring's mean (rest barycentric weights),
+// reading the others' as they are. Serial and in vertex order (Jacobi), so the result does
+// not depend on threads. Returns how many moved.
+int smoothCorrections(Frame& fr) {
+  DeformState& st = *fr.st;
+  const DeformOptions& opt = *fr.opt;
+  const Calibration& cal = fr.model->calibration;
+  const auto rigid = fr.in->rigid_positions;
+  const auto moved = [&](std::uint32_t u) {
+    return (st.flags[u] & (kVertexMoved | kVertexRelaxed)) != 0;
+  };
+  st.smooth_list.clear();
+  for (const std::uint32_t v : st.smooth_pool) {
+    if (st.cand_count[v] != 0) continue;  // near a collider (and any contact): as solved
+    bool active = moved(v);
+    for (std::uint32_t k = cal.ring_offsets[v]; k < cal.ring_offsets[v + 1] && !active; ++k) {
+      active = moved(cal.ring[k]);
+    }
+    if (!active) continue;
+    st.smooth_list.push_back(v);
+    st.smooth_mark[v] = 1;
+    st.correction[v] = st.positions[v] - rigid[v];
+  }
+  const float a = opt.smooth_rate;
+  for (int pass = 0; pass < opt.smooth_passes; ++pass) {
+    for (const std::uint32_t v : st.smooth_list) {
+      glm::vec3 mean(0.0f);
+      for (std::uint32_t k = cal.ring_offsets[v]; k < cal.ring_offsets[v + 1]; ++k) {
+        const std::uint32_t u = cal.ring[k];
+        mean += cal.ring_weights[k] *
+                (st.smooth_mark[u] != 0 ? st.correction[u] : st.positions[u] - rigid[u]);
+      }
+      st.correction_next[v] = (1.0f - a) * st.correction[v] + a * mean;
+    }
+    for (const std::uint32_t v : st.smooth_list) st.correction[v] = st.correction_next[v];
+  }
+  int count = 0;
+  for (const std::uint32_t v : st.smooth_list) {
+    st.smooth_mark[v] = 0;
+    const glm::vec3 c = st.correction[v];
+    const glm::vec3 p = rigid[v] + c;
+    if (p == st.positions[v]) continue;
+    st.positions[v] = p;
+    ++count;
+    std::uint8_t& flags = st.flags[v];
+    flags |= kVertexSmoothed;
+    if (p != rigid[v]) flags |= kVertexMoved;
+    if ((flags & kVertexReshaped) == 0 && glm::dot(c, c) > kReshapeOffset * kReshapeOffset) {
+      flags |= kVertexReshaped;
+      markReshaped(fr, static_cast<int>(v));
+    }
+  }
+  return count;
+}
+
 // Step 3a: normals. Vertices untouched by deformation (and whose neighbours are too; a move
 // below kReshapeOffset counts as untouched) keep their rigid normals; the others get
 // area-weighted normals of the deformed faces. First the faces with a dirty vertex (each
@@ -1239,6 +1298,24 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
   st.cand_omega.assign(nv * kMaxCandidates, 1.0f);
   st.directions.assign(nv, glm::vec3(0.0f));
   st.field_gradient.assign(nv, glm::vec3(NAN));
+  // Joint vertices, and free vertices beside them (a vertex of a joint region demoted at
+  // calibration): the vertices the smoothing of corrections may move.
+  st.smooth_pool.clear();
+  const Calibration& cal = model.calibration;
+  for (std::size_t v = 0; v < nv; ++v) {
+    bool pooled = cal.vertex_class[v] == VertexClass::kJoint;
+    if (cal.vertex_class[v] == VertexClass::kFree) {
+      for (std::uint32_t k = cal.ring_offsets[v]; k < cal.ring_offsets[v + 1] && !pooled; ++k) {
+        pooled = cal.vertex_class[cal.ring[k]] == VertexClass::kJoint;
+      }
+    }
+    if (pooled) st.smooth_pool.push_back(static_cast<std::uint32_t>(v));
+  }
+  st.smooth_list.clear();
+  st.smooth_list.reserve(st.smooth_pool.size());
+  st.correction.assign(nv, glm::vec3(0.0f));
+  st.correction_next.assign(nv, glm::vec3(0.0f));
+  st.smooth_mark.assign(nv, 0);
   st.contacts.clear();
   st.contacts.reserve(64);
   st.counters = {};
@@ -1350,6 +1427,9 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
     parallelFor(pool, chunks, copy);
   }
 
+  // Smoothing the joint regions' corrections.
+  const int smoothed = opt.smooth_passes > 0 ? smoothCorrections(fr) : 0;
+
   // Step 3: normals, then contacts and forces.
   const int nface = static_cast<int>(st.face_cross.size());
   const int face_chunks = (nface + fr.chunk - 1) / fr.chunk;
@@ -1382,6 +1462,7 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
     total.relaxed_vertices += k.relaxed_vertices;
     total.max_offset = std::max(total.max_offset, k.max_offset);
   }
+  total.smoothed_vertices = smoothed;
   st.counters = total;
 }
 

@@ -299,7 +299,7 @@ Status runDeform(const DeformCommandOptions& opt) {
       "frame,time_s,body,contact_area_m2,force_x_n,force_y_n,force_z_n,force_n,partner\n";
   SceneTimings total;
   double step_ms = 0.0;
-  std::int64_t iterations = 0, iterating = 0, unsolved = 0, held = 0;
+  std::int64_t iterations = 0, iterating = 0, unsolved = 0, held = 0, smoothed = 0;
   int contact_frames = 0;
   double max_force = 0.0, max_area = 0.0;
   const double t0 = first * frame_time;
@@ -357,6 +357,7 @@ Status runDeform(const DeformCommandOptions& opt) {
         iterating += state->counters.iterating_vertices;
         unsolved += state->counters.unsolved_vertices;
         held += state->counters.held_vertices;
+        smoothed += state->counters.smoothed_vertices;
       }
     }
     if (contact) ++contact_frames;
@@ -404,10 +405,10 @@ Status runDeform(const DeformCommandOptions& opt) {
   if (!opt.rigid_only) {
     fmt::print(
         "contact in {} of {} frames; largest contact area {:.6f} m^2, largest |F| {:.4g} N; "
-        "iterations per iterating vertex {:.2f}; unsolved vertex-frames {}, held {}\n",
+        "iterations per iterating vertex {:.2f}; unsolved vertex-frames {}, held {}, smoothed {}\n",
         contact_frames, frame_count, max_area, max_force,
         iterating > 0 ? static_cast<double>(iterations) / static_cast<double>(iterating) : 0.0,
-        unsolved, held);
+        unsolved, held, smoothed);
   }
   fmt::print("wrote {}: {} frames at {:.4g} s, {} vertices, {} triangles\n", opt.out, frame_count,
              gltf.frame_time, total_vertices, gltf.mesh.indices.size() / 3);
