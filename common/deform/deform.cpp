@@ -1013,13 +1013,32 @@ void passRelax(Frame& fr, int first, int count, DeformCounters& cnt) {
   }
 }
 
+// Whether a collision term may have shaped vertex v's solution this frame: it touches, it
+// penetrated a collider in the rigid pose, or a collider may bulge it (another body's, or any
+// with self-propagation). A vertex whose only colliders are its own body's, neither touched
+// nor penetrated, solved its own equation alone (the joint's opposite limb, always paired
+// with a joint vertex, acts only where the vertex enters it).
+bool collisionShaped(const Frame& fr, std::uint32_t v) {
+  const DeformState& st = *fr.st;
+  const int n = st.cand_count[v] & 0x7F;
+  if (n == 0) return false;
+  if ((st.cand_count[v] & 0x80) != 0) return true;  // more colliders than were listed
+  if ((st.flags[v] & kVertexContact) != 0 || st.depth[v] > 0.0f) return true;
+  for (int i = 0; i < n; ++i) {
+    const std::uint16_t c = st.cand_collider[static_cast<std::size_t>(v) * kMaxCandidates +
+                                             static_cast<std::size_t>(i)];
+    if (st.colliders[c].body != fr.self || fr.opt->self_propagation) return true;
+  }
+  return false;
+}
+
 // The last part of Step 2: smooths the corrections c = P' - P of the joint regions (see
 // the header and DeformOptions::smooth_passes). The vertices smoothed are those of the pool
-// (joint vertices and the free ones beside them) with no collider, so none in contact, that
-// moved or have a neighbour that moved (beyond them nothing spreads); each pass moves their
-// corrections smooth_rate of the way to the one-ring's mean (rest barycentric weights),
-// reading the others' as they are. Serial and in vertex order (Jacobi), so the result does
-// not depend on threads. Returns how many moved.
+// (joint vertices and the free ones beside them) that no collision term shaped (see
+// collisionShaped), so none in contact, that moved or have a neighbour that moved (beyond
+// them nothing spreads); each pass moves their corrections smooth_rate of the way to the
+// one-ring's mean (rest barycentric weights), reading the others' as they are. Serial and in
+// vertex order (Jacobi), so the result does not depend on threads. Returns how many moved.
 int smoothCorrections(Frame& fr) {
   DeformState& st = *fr.st;
   const DeformOptions& opt = *fr.opt;
@@ -1030,7 +1049,7 @@ int smoothCorrections(Frame& fr) {
   };
   st.smooth_list.clear();
   for (const std::uint32_t v : st.smooth_pool) {
-    if (st.cand_count[v] != 0) continue;  // near a collider (and any contact): as solved
+    if (collisionShaped(fr, v)) continue;
     bool active = moved(v);
     for (std::uint32_t k = cal.ring_offsets[v]; k < cal.ring_offsets[v + 1] && !active; ++k) {
       active = moved(cal.ring[k]);

@@ -20,10 +20,10 @@
 //     w_v, so its own iso-surface, and where the skinning slides a joint region across its
 //     primitives (a raised shoulder) neighbours with weights from 0.25 to 1.3 would follow
 //     surfaces centimetres apart and crumple the skin. Joint vertices, and free vertices
-//     beside them, with no collider move towards their one-ring's mean correction; every
-//     vertex near a collider (so every contact vertex) keeps its solution. At rest every
-//     correction is 0 and nothing moves. Also a departure from DESIGN.md, which leaves each
-//     vertex on its own surface.
+//     beside them, move towards their one-ring's mean correction unless a collision term
+//     shaped their solution (touching, penetrating in the rigid pose, or near another body,
+//     which may bulge them): those keep it. At rest every correction is 0 and nothing moves.
+//     Also a departure from DESIGN.md, which leaves each vertex on its own surface.
 //   Step 3: normals of the deformed skin, contact flags and areas, pressures and reaction
 //     forces per partner body.
 //
