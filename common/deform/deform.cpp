@@ -1082,7 +1082,11 @@ int smoothCorrections(Frame& fr) {
     ++count;
     std::uint8_t& flags = st.flags[v];
     flags |= kVertexSmoothed;
-    if (p != rigid[v]) flags |= kVertexMoved;
+    if (p != rigid[v]) {
+      flags |= kVertexMoved;
+    } else {
+      flags &= static_cast<std::uint8_t>(~kVertexMoved);
+    }
     if ((flags & kVertexReshaped) == 0 && glm::dot(c, c) > kReshapeOffset * kReshapeOffset) {
       flags |= kVertexReshaped;
       markReshaped(fr, static_cast<int>(v));

@@ -101,7 +101,8 @@ struct DeformCounters {
   int iterating_vertices = 0;         // vertices whose first evaluation was not a root
   int unsolved_vertices = 0;          // no root within reach: left at the rigid position
   int held_vertices = 0;              // joint vertices whose root left their own side (see
-                                      // DeformOptions::joint_own_side): left rigid
+                                      // DeformOptions::joint_own_side): left rigid by the
+                                      // solve (the smoothing may move them)
   int gradient_vertices = 0;          // projected along -grad F (normal disagreed)
   int relaxed_vertices = 0;           // moved by tangential relaxation
   int smoothed_vertices = 0;          // moved by the smoothing of corrections
