@@ -149,7 +149,8 @@ inline float evaluateTerms(VertexProblem& vp, const glm::vec3& p, glm::vec3& gra
   float g = ownExcess(vp, p, grad);
   for (int i = 0; i < vp.ncand; ++i) {
     const Candidate& c = vp.cand[i];
-    if (!inBounds(*c.prim, p)) continue;
+    // A hard partner without a bulge adds nothing to g (it is enforced after the solve).
+    if ((c.hard && !(c.bulge > 0.0f)) || !inBounds(*c.prim, p)) continue;
     glm::vec3 gf;
     const float f = primitiveField(*c.prim, p, &gf);
     const float x = c.omega * f - c.iso;
