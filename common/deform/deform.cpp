@@ -643,14 +643,16 @@ RootResult solveVertex(VertexProblem& vp, glm::vec3& dir, float s_start, float g
       *dg = -c.omega * glm::dot(gf, dir);
       return c.iso - c.omega * f;
     };
-    const RootResult rh = findRoot(eval_hard, res.s, reach, ropt);
+    // The partner's field at the soft root, once: the line search's start, and its gradient
+    // for the way out below.
+    const glm::vec3 p1 = p0 + res.s * dir;
+    glm::vec3 inward;
+    const float g1 = c.iso - c.omega * primitiveField(*c.prim, p1, &inward);
+    const RootResult rh =
+        findRoot(eval_hard, res.s, g1, -c.omega * glm::dot(inward, dir), reach, ropt);
     cnt.evaluations += 1 + rh.iterations;
     cnt.iterations += 1 + rh.iterations;
     // The shortest way out of the partner is along its gradient: about x / |grad(omega F)|.
-    const glm::vec3 p1 = p0 + res.s * dir;
-    glm::vec3 inward;
-    primitiveField(*c.prim, p1, &inward);
-    ++cnt.evaluations;
     const float len = glm::length(inward);
     const float exit = len > 0.0f ? x / (c.omega * len) : INFINITY;
     if (rh.found && std::abs(rh.s - res.s) <= std::max(kGrazeMinOffset, kGrazeFactor * exit)) {
