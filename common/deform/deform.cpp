@@ -854,6 +854,14 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
     if ((st.flags[vi] & kVertexGradient) != 0 || opt.projection == ProjectionMode::kGradient) {
       s_start = 0.0f;  // a gradient line is re-derived each frame from the rigid position
     }
+    // A free vertex's own equation is the plane through its rigid position along its normal:
+    // with no soft term (every candidate a hard constraint without a bulge) its root is the
+    // rigid position itself, whatever its last solution was.
+    if (vp.cls == VertexClass::kFree &&
+        std::all_of(vp.cand, vp.cand + vp.ncand,
+                    [](const Candidate& c) { return c.hard && !(c.bulge > 0.0f); })) {
+      s_start = 0.0f;
+    }
     glm::vec3 grad;
     float g = evaluate(vp, vp.p0 + s_start * dir, grad);
     ++cnt.evaluations;
