@@ -311,12 +311,42 @@ float lowestTerm(const Frame& fr, const DeformState::Collider& col) {
   return bulges ? -fr.model->primitives.propagation_width : -kContactTolerance;
 }
 
+// A collider list entry with what does not depend on the vertex (for vertices whose
+// defining primitives are the key the list was made for).
+struct Listed {
+  DeformState::Collider* col = nullptr;
+  std::uint16_t c = 0;        // collider index
+  bool always_entry = false;  // from an always-pair (see kAlwaysEntry)
+  bool same = false;          // the vertex's own body
+  bool adjacent = false;      // own body, joined to a key primitive in the graph
+  bool rigid = false;         // infinite stiffness
+  float lowest = 0.0f;        // lowestTerm
+};
+
+// Describes `n` entries of a collider list for vertices with defining primitives key[0..2].
+void describeList(const Frame& fr, const std::array<std::int16_t, 4>& key,
+                  const std::uint16_t* entries, int n, Listed* out) {
+  DeformState& st = *fr.st;
+  const CombinationGraph& graph = fr.model->graph;
+  for (int i = 0; i < n; ++i) {
+    Listed& l = out[i];
+    l.c = static_cast<std::uint16_t>(entries[i] & ~kAlwaysEntry);
+    l.always_entry = (entries[i] & kAlwaysEntry) != 0;
+    l.col = &st.colliders[l.c];
+    l.same = l.col->body == fr.self;
+    l.adjacent = l.same && ((key[0] >= 0 && graph.neighbours(key[0], l.col->prim)) ||
+                            (key[1] >= 0 && graph.neighbours(key[1], l.col->prim)) ||
+                            (key[2] >= 0 && graph.neighbours(key[2], l.col->prim)));
+    l.rigid = std::isinf(l.col->posed->stiffness);
+    l.lowest = lowestTerm(fr, *l.col);
+  }
+}
+
 // Pass A for vertex v: picks its collision candidates from `list` (listColliders for its
 // patch) into the state's cache, each only when the rigid position p0 is near the
 // collider's support; records the rigid-pose penetration (depth, pressure) and each
 // collider's deepest penetration this frame.
-void findCandidates(const Frame& fr, int v, const glm::vec3& p0,
-                    std::span<const std::uint16_t> list) {
+void findCandidates(const Frame& fr, int v, const glm::vec3& p0, std::span<const Listed> list) {
   const ImplicitModel& m = *fr.model;
   const Calibration& cal = m.calibration;
   DeformState& st = *fr.st;
@@ -333,27 +363,26 @@ void findCandidates(const Frame& fr, int v, const glm::vec3& p0,
   float* reaches = &st.cand_reach[vi * kMaxCandidates];
   float* omegas = &st.cand_omega[vi * kMaxCandidates];
   const float w = cal.w[vi];
-  const CombinationGraph& graph = m.graph;
   // A collider matters only where its term can be non-zero (see lowestTerm). Bound x over
   // the points within the cull margin of where the vertex was solved last frame (its rigid
   // position offset by the warm start).
   const float margin = kCullMargin + std::abs(st.offset[vi]);
-  for (const std::uint16_t entry : list) {
-    const int c = entry & ~kAlwaysEntry;
-    DeformState::Collider& col = st.colliders[static_cast<std::size_t>(c)];
+  for (const Listed& l : list) {
+    const int c = l.c;
+    DeformState::Collider& col = *l.col;
     if (!insideBox(col.cull, p0)) continue;
-    const bool same = col.body == fr.self;
+    const bool same = l.same;
     float iso = m.primitives.iso;
     bool always = false;
     if (same) {
-      if ((entry & kAlwaysEntry) == 0 && col.prim == pr[3]) continue;  // its own bone
+      if (!l.always_entry && col.prim == pr[3]) continue;  // its own bone
       for (std::uint32_t q = pair_begin; q < pair_end; ++q) {
         if (cal.pairs[q].prim == col.prim) {
           iso = cal.pairs[q].iso;
           always = always || (cal.pairs[q].flags & kPairAlways) != 0;
         }
       }
-      if ((entry & kAlwaysEntry) != 0 && !always) continue;  // another vertex's pair
+      if (l.always_entry && !always) continue;  // another vertex's pair
     }
     // The skeleton distance d and its gradient (as skeletonDistance), keeping the offset.
     const PosedPrimitive& prim = *col.posed;
@@ -366,16 +395,14 @@ void findCandidates(const Frame& fr, int v, const glm::vec3& p0,
     const float k_other = prim.stiffness;
     const float r_near = std::max(d - margin * col.inv_unit, 0.0f) * prim.inv_r_out;
     const float density_near = densityValue(prim.density, r_near);
-    const float lowest = lowestTerm(fr, col);
+    const float lowest = l.lowest;
     // The partner field's scale: 1 for a rigid partner; the vertex's own weight for a
     // neighbouring part of its body (joined to one of its primitives through a joint: the
     // two skins meet at a crease calibrated at rest); else the partner's skin weight (first
     // bounded by the grid's largest, which settles most colliders without a lookup).
-    const bool neighbour = same && (always || (pr[0] >= 0 && graph.neighbours(pr[0], col.prim)) ||
-                                    (pr[1] >= 0 && graph.neighbours(pr[1], col.prim)) ||
-                                    (pr[2] >= 0 && graph.neighbours(pr[2], col.prim)));
+    const bool neighbour = same && (always || l.adjacent);
     float omega = 1.0f;
-    if (!std::isinf(k_other)) {
+    if (!l.rigid) {
       if (neighbour) {
         omega = w;
       } else {
@@ -525,10 +552,12 @@ void passPenetration(Frame& fr, int first, int last) {
       for (std::uint32_t i = b; i < e; ++i) clear(st.order[i]);
       continue;
     }
+    Listed described[kMaxListed];
+    if (n > 0) describeList(fr, key, list, n, described);
     for (std::uint32_t i = b; i < e; ++i) {
       const std::uint32_t v = st.order[i];
       if (n > 0) {
-        findCandidates(fr, static_cast<int>(v), pos[v], {list, static_cast<std::size_t>(n)});
+        findCandidates(fr, static_cast<int>(v), pos[v], {described, static_cast<std::size_t>(n)});
         continue;
       }
       // The patch's list overflowed: list the vertex's own.
@@ -542,7 +571,8 @@ void passPenetration(Frame& fr, int first, int last) {
       int nv = listColliders(fr, {pr[0], pr[1], pr[2], pr[3]}, {own_always, na},
                              Bounds{pos[v], pos[v]}, list);
       if (nv < 0) nv = kMaxListed;  // more near one vertex than a list holds: the first ones
-      findCandidates(fr, static_cast<int>(v), pos[v], {list, static_cast<std::size_t>(nv)});
+      describeList(fr, pr, list, nv, described);
+      findCandidates(fr, static_cast<int>(v), pos[v], {described, static_cast<std::size_t>(nv)});
       if (nv == kMaxListed) st.cand_count[v] |= 0x80;
     }
   }
