@@ -16,8 +16,10 @@
 
 namespace vistel {
 
-// a^n for small positive integer n.
+// a^n for small positive integer n (multiplied left to right; n = 3, DIFF's usual a^(n-1),
+// without the loop).
 inline float powInt(float a, int n) {
+  if (n == 3) return a * a * a;
   float r = 1.0f;
   for (int i = 0; i < n; ++i) r *= a;
   return r;
