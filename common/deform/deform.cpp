@@ -342,103 +342,201 @@ void describeList(const Frame& fr, const std::array<std::int16_t, 4>& key,
   }
 }
 
-// Pass A for vertex v: picks its collision candidates from `list` (listColliders for its
-// patch) into the state's cache, each only when the rigid position p0 is near the
-// collider's support; records the rigid-pose penetration (depth, pressure) and each
-// collider's deepest penetration this frame.
-void findCandidates(const Frame& fr, int v, const glm::vec3& p0, std::span<const Listed> list) {
+// Points of a patch (at most kPatchSize), one array per coordinate, and their offsets from one
+// collider's skeleton: what pass A's first tests need for every vertex of the patch.
+struct PatchPoints {
+  int count = 0;
+  std::uint32_t vertex[kPatchSize];
+  float x[kPatchSize], y[kPatchSize], z[kPatchSize];
+};
+struct PatchOffsets {
+  float x[kPatchSize], y[kPatchSize], z[kPatchSize];  // skeletonOffset
+  float scale[kPatchSize];                            // its scale
+  float len2[kPatchSize];                             // |offset|^2
+  std::uint8_t near[kPatchSize];  // inside the collider's cull box and about within its cull
+                                  // distance
+};
+
+// skeletonOffset, its squared length and the cull tests for every point of a patch against
+// one collider: the same operations in the same order as the per-point functions (so the
+// same results), as loops over the points without branches that the compiler can vectorise
+// (the cone's division is made for every point, and used only where its radius is positive).
+void patchOffsets(const DeformState::Collider& col, const PatchPoints& p, PatchOffsets& o) {
+  const Shape& s = col.posed->shape;
+  const int m = p.count;
+  const auto along_axis = [&](int i, float apx, float apy, float apz, float t) {
+    o.x[i] = apx - t * s.axis.x;
+    o.y[i] = apy - t * s.axis.y;
+    o.z[i] = apz - t * s.axis.z;
+  };
+  switch (s.kind) {
+    case ShapeKind::kSphere:
+      for (int i = 0; i < m; ++i) {
+        o.x[i] = p.x[i] - s.a.x;
+        o.y[i] = p.y[i] - s.a.y;
+        o.z[i] = p.z[i] - s.a.z;
+        o.scale[i] = 1.0f;
+      }
+      break;
+    case ShapeKind::kSphylinder:
+      for (int i = 0; i < m; ++i) {
+        const float apx = p.x[i] - s.a.x, apy = p.y[i] - s.a.y, apz = p.z[i] - s.a.z;
+        const float t =
+            std::clamp(apx * s.axis.x + apy * s.axis.y + apz * s.axis.z, 0.0f, s.length);
+        along_axis(i, apx, apy, apz, t);
+        o.scale[i] = 1.0f;
+      }
+      break;
+    case ShapeKind::kConeSphere:
+      for (int i = 0; i < m; ++i) {
+        const float apx = p.x[i] - s.a.x, apy = p.y[i] - s.a.y, apz = p.z[i] - s.a.z;
+        const float x = apx * s.axis.x + apy * s.axis.y + apz * s.axis.z;
+        const float y2 = std::max(apx * apx + apy * apy + apz * apz - x * x, 0.0f);
+        const float k = s.cone_slope;
+        const float rx = s.radius_a + k * x;
+        const float inside = std::clamp(x + k * y2 / rx, 0.0f, s.length);  // used when rx > 0
+        const float z = rx > 0.0f ? inside : (k > 0.0f ? s.length : 0.0f);
+        o.scale[i] = 1.0f / (s.radius_a + k * z);
+        along_axis(i, apx, apy, apz, z);
+      }
+      break;
+    case ShapeKind::kOffsetPolygon:
+      if (s.rectangle) {
+        for (int i = 0; i < m; ++i) {
+          const float rx = p.x[i] - s.a.x, ry = p.y[i] - s.a.y, rz = p.z[i] - s.a.z;
+          const float cx =
+              std::clamp(rx * s.u.x + ry * s.u.y + rz * s.u.z, s.rect_min.x, s.rect_max.x);
+          const float cy =
+              std::clamp(rx * s.v.x + ry * s.v.y + rz * s.v.z, s.rect_min.y, s.rect_max.y);
+          o.x[i] = rx - cx * s.u.x - cy * s.v.x;
+          o.y[i] = ry - cx * s.u.y - cy * s.v.y;
+          o.z[i] = rz - cx * s.u.z - cy * s.v.z;
+          o.scale[i] = 1.0f;
+        }
+      } else {
+        for (int i = 0; i < m; ++i) {
+          const glm::vec3 d = polygonOffset(s, glm::vec3(p.x[i], p.y[i], p.z[i]));
+          o.x[i] = d.x;
+          o.y[i] = d.y;
+          o.z[i] = d.z;
+          o.scale[i] = 1.0f;
+        }
+      }
+      break;
+  }
+  // Squared, with a margin for rounding (no square root, which keeps the loop vectorised):
+  // a point passes when it may be within the cull distance; the caller tests exactly.
+  const Bounds& c = col.cull;
+  const float cull2 = 1.0001f * col.cull_distance * col.cull_distance;
+  for (int i = 0; i < m; ++i) {
+    o.len2[i] = o.x[i] * o.x[i] + o.y[i] * o.y[i] + o.z[i] * o.z[i];
+    const bool in_box = (p.x[i] >= c.min.x) & (p.x[i] <= c.max.x) & (p.y[i] >= c.min.y) &
+                        (p.y[i] <= c.max.y) & (p.z[i] >= c.min.z) & (p.z[i] <= c.max.z);
+    o.near[i] = in_box & !(o.len2[i] * (o.scale[i] * o.scale[i]) > cull2);
+  }
+}
+
+// Pass A for the vertices of a patch: picks each one's collision candidates from `list`
+// (listColliders for the patch, described) into the state's cache, each only when its rigid
+// position is near the collider's support; records each vertex's rigid-pose penetration
+// (depth, pressure) and each collider's deepest penetration this frame. Collider by collider,
+// so each vertex's candidates keep the list's order.
+void findCandidates(const Frame& fr, const PatchPoints& pts, std::span<const Listed> list) {
   const ImplicitModel& m = *fr.model;
   const Calibration& cal = m.calibration;
   DeformState& st = *fr.st;
-  const auto vi = static_cast<std::size_t>(v);
-  const auto& pr = cal.prims[vi];
-  std::uint16_t* ids = &st.cand_collider[vi * kMaxCandidates];
-  float* isos = &st.cand_iso[vi * kMaxCandidates];
-  int n = 0;
-  bool overflow = false;
-  float best_depth = 0.0f;
-  float best_pressure = 0.0f;
-  const std::uint32_t pair_begin = cal.pair_offsets[vi];
-  const std::uint32_t pair_end = cal.pair_offsets[vi + 1];
-  float* reaches = &st.cand_reach[vi * kMaxCandidates];
-  float* omegas = &st.cand_omega[vi * kMaxCandidates];
-  const float w = cal.w[vi];
-  // A collider matters only where its term can be non-zero (see lowestTerm). Bound x over
-  // the points within the cull margin of where the vertex was solved last frame (its rigid
-  // position offset by the warm start).
-  const float margin = kCullMargin + std::abs(st.offset[vi]);
+  int count[kPatchSize] = {};
+  bool overflow[kPatchSize] = {};
+  float best_depth[kPatchSize] = {};
+  float best_pressure[kPatchSize] = {};
+  PatchOffsets off;
   for (const Listed& l : list) {
     const int c = l.c;
     DeformState::Collider& col = *l.col;
-    if (!insideBox(col.cull, p0)) continue;
-    const bool same = l.same;
-    float iso = m.primitives.iso;
-    bool always = false;
-    if (same) {
-      if (!l.always_entry && col.prim == pr[3]) continue;  // its own bone
-      for (std::uint32_t q = pair_begin; q < pair_end; ++q) {
-        if (cal.pairs[q].prim == col.prim) {
-          iso = cal.pairs[q].iso;
-          always = always || (cal.pairs[q].flags & kPairAlways) != 0;
+    patchOffsets(col, pts, off);
+    const PosedPrimitive& prim = *col.posed;
+    for (int i = 0; i < pts.count; ++i) {
+      if (off.near[i] == 0) continue;
+      const std::uint32_t v = pts.vertex[i];
+      const auto vi = static_cast<std::size_t>(v);
+      const auto& pr = cal.prims[vi];
+      float iso = m.primitives.iso;
+      bool always = false;
+      if (l.same) {
+        if (!l.always_entry && col.prim == pr[3]) continue;  // its own bone
+        for (std::uint32_t q = cal.pair_offsets[vi]; q < cal.pair_offsets[vi + 1]; ++q) {
+          if (cal.pairs[q].prim == col.prim) {
+            iso = cal.pairs[q].iso;
+            always = always || (cal.pairs[q].flags & kPairAlways) != 0;
+          }
+        }
+        if (l.always_entry && !always) continue;  // another vertex's pair
+      }
+      // The skeleton distance d and its gradient (as skeletonDistance), keeping the offset.
+      const glm::vec3 p0(pts.x[i], pts.y[i], pts.z[i]);
+      const glm::vec3 offset(off.x[i], off.y[i], off.z[i]);
+      const float scale = off.scale[i];
+      const float len = std::sqrt(off.len2[i]);
+      const float d = len * scale;
+      if (d > col.cull_distance) continue;
+      const glm::vec3 gd = len > 0.0f ? offset * (scale / len) : glm::vec3(0.0f);
+      const float k_other = prim.stiffness;
+      // A collider matters only where its term can be non-zero (see lowestTerm). Bound x over
+      // the points within the cull margin of where the vertex was solved last frame (its
+      // rigid position offset by the warm start).
+      const float margin = kCullMargin + std::abs(st.offset[vi]);
+      const float r_near = std::max(d - margin * col.inv_unit, 0.0f) * prim.inv_r_out;
+      const float density_near = densityValue(prim.density, r_near);
+      const float lowest = l.lowest;
+      // The partner field's scale: 1 for a rigid partner; the vertex's own weight for a
+      // neighbouring part of its body (joined to one of its primitives through a joint: the
+      // two skins meet at a crease calibrated at rest); else the partner's skin weight (first
+      // bounded by the grid's largest, which settles most colliders without a lookup).
+      const bool neighbour = l.same && (always || l.adjacent);
+      float omega = 1.0f;
+      if (!l.rigid) {
+        if (neighbour) {
+          omega = cal.w[vi];
+        } else {
+          if (!(prim.max_skin_weight * prim.weight * density_near - iso > lowest)) continue;
+          omega = skinWeight(prim, p0, offset, scale);
         }
       }
-      if (l.always_entry && !always) continue;  // another vertex's pair
-    }
-    // The skeleton distance d and its gradient (as skeletonDistance), keeping the offset.
-    const PosedPrimitive& prim = *col.posed;
-    float scale;
-    const glm::vec3 offset = skeletonOffset(prim.shape, p0, scale);
-    const float len = std::sqrt(glm::dot(offset, offset));
-    const float d = len * scale;
-    if (d > col.cull_distance) continue;
-    const glm::vec3 gd = len > 0.0f ? offset * (scale / len) : glm::vec3(0.0f);
-    const float k_other = prim.stiffness;
-    const float r_near = std::max(d - margin * col.inv_unit, 0.0f) * prim.inv_r_out;
-    const float density_near = densityValue(prim.density, r_near);
-    const float lowest = l.lowest;
-    // The partner field's scale: 1 for a rigid partner; the vertex's own weight for a
-    // neighbouring part of its body (joined to one of its primitives through a joint: the
-    // two skins meet at a crease calibrated at rest); else the partner's skin weight (first
-    // bounded by the grid's largest, which settles most colliders without a lookup).
-    const bool neighbour = same && (always || l.adjacent);
-    float omega = 1.0f;
-    if (!l.rigid) {
-      if (neighbour) {
-        omega = w;
-      } else {
-        if (!(prim.max_skin_weight * prim.weight * density_near - iso > lowest)) continue;
-        omega = skinWeight(prim, p0, offset, scale);
+      const float x_near = omega * prim.weight * density_near - iso;
+      if (!(x_near > lowest)) continue;
+      if (count[i] == kMaxCandidates) {
+        overflow[i] = true;
+        continue;
+      }
+      const std::size_t slot = vi * kMaxCandidates + static_cast<std::size_t>(count[i]);
+      st.cand_collider[slot] = static_cast<std::uint16_t>(c);
+      st.cand_iso[slot] = iso;
+      st.cand_reach[slot] = x_near;
+      st.cand_omega[slot] = omega;
+      ++count[i];
+      // Rigid-pose penetration into this collider.
+      const float r = d * prim.inv_r_out;
+      if (r >= 1.0f) continue;
+      float fp = 0.0f;
+      const float f = prim.weight * densityValue(prim.density, r, &fp);
+      const float x = omega * f - iso;
+      if (!(x > 0.0f)) continue;
+      atomicMaxBits(col.pmax_bits, x);
+      const float gn = omega * prim.weight * std::abs(fp) * prim.inv_r_out * glm::length(gd);
+      const float depth = gn > 0.0f ? x / gn : 0.0f;
+      if (depth > best_depth[i] && depth > kMinContactDepth) {
+        best_depth[i] = depth;
+        best_pressure[i] =
+            effectiveStiffness(ownStiffness(fr, static_cast<int>(v)), k_other) * depth;
       }
     }
-    const float x_near = omega * prim.weight * density_near - iso;
-    if (!(x_near > lowest)) continue;
-    if (n == kMaxCandidates) {
-      overflow = true;
-      continue;
-    }
-    ids[n] = static_cast<std::uint16_t>(c);
-    isos[n] = iso;
-    reaches[n] = x_near;
-    omegas[n] = omega;
-    ++n;
-    // Rigid-pose penetration into this collider.
-    const float r = d * prim.inv_r_out;
-    if (r >= 1.0f) continue;
-    float fp = 0.0f;
-    const float f = prim.weight * densityValue(prim.density, r, &fp);
-    const float x = omega * f - iso;
-    if (!(x > 0.0f)) continue;
-    atomicMaxBits(col.pmax_bits, x);
-    const float gn = omega * prim.weight * std::abs(fp) * prim.inv_r_out * glm::length(gd);
-    const float depth = gn > 0.0f ? x / gn : 0.0f;
-    if (depth > best_depth && depth > kMinContactDepth) {
-      best_depth = depth;
-      best_pressure = effectiveStiffness(ownStiffness(fr, v), k_other) * depth;
-    }
   }
-  st.cand_count[vi] = static_cast<std::uint8_t>(n | (overflow ? 0x80 : 0));
-  st.depth[vi] = best_depth;
-  st.pressure[vi] = best_pressure;
+  for (int i = 0; i < pts.count; ++i) {
+    const std::uint32_t v = pts.vertex[i];
+    st.cand_count[v] = static_cast<std::uint8_t>(count[i] | (overflow[i] ? 0x80 : 0));
+    st.depth[v] = best_depth[i];
+    st.pressure[v] = best_pressure[i];
+  }
 }
 
 // Loads vertex v's cached candidates into vp with their material terms. with_bulge: use
@@ -553,13 +651,22 @@ void passPenetration(Frame& fr, int first, int last) {
       continue;
     }
     Listed described[kMaxListed];
-    if (n > 0) describeList(fr, key, list, n, described);
+    PatchPoints pts;
+    if (n > 0) {
+      describeList(fr, key, list, n, described);
+      pts.count = static_cast<int>(e - b);
+      for (std::uint32_t i = b; i < e; ++i) {
+        const std::uint32_t v = st.order[i];
+        pts.vertex[i - b] = v;
+        pts.x[i - b] = pos[v].x;
+        pts.y[i - b] = pos[v].y;
+        pts.z[i - b] = pos[v].z;
+      }
+      findCandidates(fr, pts, {described, static_cast<std::size_t>(n)});
+      continue;
+    }
     for (std::uint32_t i = b; i < e; ++i) {
       const std::uint32_t v = st.order[i];
-      if (n > 0) {
-        findCandidates(fr, static_cast<int>(v), pos[v], {described, static_cast<std::size_t>(n)});
-        continue;
-      }
       // The patch's list overflowed: list the vertex's own.
       const auto& pr = cal.prims[v];
       std::int16_t own_always[kMaxListed];
@@ -572,7 +679,12 @@ void passPenetration(Frame& fr, int first, int last) {
                              Bounds{pos[v], pos[v]}, list);
       if (nv < 0) nv = kMaxListed;  // more near one vertex than a list holds: the first ones
       describeList(fr, pr, list, nv, described);
-      findCandidates(fr, static_cast<int>(v), pos[v], {described, static_cast<std::size_t>(nv)});
+      pts.count = 1;
+      pts.vertex[0] = v;
+      pts.x[0] = pos[v].x;
+      pts.y[0] = pos[v].y;
+      pts.z[0] = pos[v].z;
+      findCandidates(fr, pts, {described, static_cast<std::size_t>(nv)});
       if (nv == kMaxListed) st.cand_count[v] |= 0x80;
     }
   }
