@@ -1267,13 +1267,12 @@ void passFaceNormals(Frame& fr, int first, int last) {
 
 void passNormals(Frame& fr, int first, int last) {
   DeformState& st = *fr.st;
+  // The rigid normals in one copy, then the dirty vertices' own.
+  std::copy(fr.in->rigid_normals.begin() + first, fr.in->rigid_normals.begin() + last,
+            st.normals.begin() + first);
   for (int v = first; v < last; ++v) {
     const auto vi = static_cast<std::size_t>(v);
-    const bool dirty = st.dirty[vi] != 0;
-    if (!dirty) {
-      st.normals[vi] = fr.in->rigid_normals[vi];
-      continue;
-    }
+    if (st.dirty[vi] == 0) continue;
     glm::vec3 n(0.0f);
     for (std::uint32_t k = st.vf_offsets[vi]; k < st.vf_offsets[vi + 1]; ++k)
       n += st.face_cross[st.vf_faces[k]];
