@@ -414,6 +414,12 @@ TEST(RealAvatars, DefaultAvatarWaveKeepsTheShouldersSmooth) {
 // that stay where the skinning put them: the skin crumples. Smoothing the joint regions'
 // corrections leaves far fewer vertices astray of their neighbours, and never moves one
 // that touches or penetrates.
+// What smoothing leaves: a raised patch on the back below the raised shoulder. By frame 60
+// the skinning has carried torso-side shoulder joint vertices deeper into the torso's field
+// (F_torso 0.41 -> 0.69 at one of them) while the shoulder sphere's field they had at rest
+// has fallen to 0; Step 2 returns them 1.2-1.4 cm outward to their calibrated level, and
+// the upper back around them, demoted to free vertices at calibration (too far from the
+// torso slab), has no field of its own and stays where the skinning put it.
 TEST(RealAvatars, DefaultAvatarWaveSmoothsTheJointRegionsCorrections) {
   const Avatar* a = test::realAvatar("default");
   ASSERT_NE(a, nullptr);
