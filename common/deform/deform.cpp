@@ -348,19 +348,21 @@ struct PatchPoints {
   int count = 0;
   std::uint32_t vertex[kPatchSize];
   float x[kPatchSize], y[kPatchSize], z[kPatchSize];
+  float margin[kPatchSize];  // cull margin and warm-start offset (see findCandidates)
+  float w[kPatchSize];       // calibration weight
 };
 struct PatchOffsets {
   float x[kPatchSize], y[kPatchSize], z[kPatchSize];  // skeletonOffset
   float scale[kPatchSize];                            // its scale
-  float len2[kPatchSize];                             // |offset|^2
-  std::uint8_t near[kPatchSize];  // inside the collider's cull box and about within its cull
-                                  // distance
+  float len[kPatchSize];                              // |offset|
+  std::uint8_t near[kPatchSize];  // inside the collider's cull box and within its cull distance
 };
 
-// skeletonOffset, its squared length and the cull tests for every point of a patch against
-// one collider: the same operations in the same order as the per-point functions (so the
-// same results), as loops over the points without branches that the compiler can vectorise
-// (the cone's division is made for every point, and used only where its radius is positive).
+// skeletonOffset, its length and the cull tests for every point of a patch against one
+// collider: the same operations in the same order as the per-point functions (so the same
+// results), as loops over the points without branches that the compiler can vectorise (the
+// cone's division is made for every point, and used only where its radius is positive; the
+// square root needs -fno-math-errno, see CMakeLists.txt).
 void patchOffsets(const DeformState::Collider& col, const PatchPoints& p, PatchOffsets& o) {
   const Shape& s = col.posed->shape;
   const int m = p.count;
@@ -424,15 +426,12 @@ void patchOffsets(const DeformState::Collider& col, const PatchPoints& p, PatchO
       }
       break;
   }
-  // Squared, with a margin for rounding (no square root, which keeps the loop vectorised):
-  // a point passes when it may be within the cull distance; the caller tests exactly.
   const Bounds& c = col.cull;
-  const float cull2 = 1.0001f * col.cull_distance * col.cull_distance;
   for (int i = 0; i < m; ++i) {
-    o.len2[i] = o.x[i] * o.x[i] + o.y[i] * o.y[i] + o.z[i] * o.z[i];
+    o.len[i] = std::sqrt(o.x[i] * o.x[i] + o.y[i] * o.y[i] + o.z[i] * o.z[i]);
     const bool in_box = (p.x[i] >= c.min.x) & (p.x[i] <= c.max.x) & (p.y[i] >= c.min.y) &
                         (p.y[i] <= c.max.y) & (p.z[i] >= c.min.z) & (p.z[i] <= c.max.z);
-    o.near[i] = in_box & !(o.len2[i] * (o.scale[i] * o.scale[i]) > cull2);
+    o.near[i] = in_box & !(o.len[i] * o.scale[i] > col.cull_distance);
   }
 }
 
@@ -476,15 +475,14 @@ void findCandidates(const Frame& fr, const PatchPoints& pts, std::span<const Lis
       const glm::vec3 p0(pts.x[i], pts.y[i], pts.z[i]);
       const glm::vec3 offset(off.x[i], off.y[i], off.z[i]);
       const float scale = off.scale[i];
-      const float len = std::sqrt(off.len2[i]);
+      const float len = off.len[i];
       const float d = len * scale;
-      if (d > col.cull_distance) continue;
       const glm::vec3 gd = len > 0.0f ? offset * (scale / len) : glm::vec3(0.0f);
       const float k_other = prim.stiffness;
       // A collider matters only where its term can be non-zero (see lowestTerm). Bound x over
       // the points within the cull margin of where the vertex was solved last frame (its
       // rigid position offset by the warm start).
-      const float margin = kCullMargin + std::abs(st.offset[vi]);
+      const float margin = pts.margin[i];
       const float r_near = std::max(d - margin * col.inv_unit, 0.0f) * prim.inv_r_out;
       const float density_near = densityValue(prim.density, r_near);
       const float lowest = l.lowest;
@@ -496,7 +494,7 @@ void findCandidates(const Frame& fr, const PatchPoints& pts, std::span<const Lis
       float omega = 1.0f;
       if (!l.rigid) {
         if (neighbour) {
-          omega = cal.w[vi];
+          omega = pts.w[i];
         } else {
           if (!(prim.max_skin_weight * prim.weight * density_near - iso > lowest)) continue;
           omega = skinWeight(prim, p0, offset, scale);
@@ -661,6 +659,8 @@ void passPenetration(Frame& fr, int first, int last) {
         pts.x[i - b] = pos[v].x;
         pts.y[i - b] = pos[v].y;
         pts.z[i - b] = pos[v].z;
+        pts.margin[i - b] = kCullMargin + std::abs(st.offset[v]);
+        pts.w[i - b] = cal.w[v];
       }
       findCandidates(fr, pts, {described, static_cast<std::size_t>(n)});
       continue;
@@ -684,6 +684,8 @@ void passPenetration(Frame& fr, int first, int last) {
       pts.x[0] = pos[v].x;
       pts.y[0] = pos[v].y;
       pts.z[0] = pos[v].z;
+      pts.margin[0] = kCullMargin + std::abs(st.offset[v]);
+      pts.w[0] = cal.w[v];
       findCandidates(fr, pts, {described, static_cast<std::size_t>(nv)});
       if (nv == kMaxListed) st.cand_count[v] |= 0x80;
     }
