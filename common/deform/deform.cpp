@@ -358,74 +358,12 @@ struct PatchOffsets {
   std::uint8_t near[kPatchSize];  // inside the collider's cull box and within its cull distance
 };
 
-// skeletonOffset, its length and the cull tests for every point of a patch against one
-// collider: the same operations in the same order as the per-point functions (so the same
-// results), as loops over the points without branches that the compiler can vectorise (the
-// cone's division is made for every point, and used only where its radius is positive; the
-// square root needs -fno-math-errno, see CMakeLists.txt).
+// skeletonOffset (skeletonOffsets), its length and the cull tests for every point of a patch
+// against one collider, as loops the compiler vectorises (the square root needs
+// -fno-math-errno, see CMakeLists.txt).
 void patchOffsets(const DeformState::Collider& col, const PatchPoints& p, PatchOffsets& o) {
-  const Shape& s = col.posed->shape;
   const int m = p.count;
-  const auto along_axis = [&](int i, float apx, float apy, float apz, float t) {
-    o.x[i] = apx - t * s.axis.x;
-    o.y[i] = apy - t * s.axis.y;
-    o.z[i] = apz - t * s.axis.z;
-  };
-  switch (s.kind) {
-    case ShapeKind::kSphere:
-      for (int i = 0; i < m; ++i) {
-        o.x[i] = p.x[i] - s.a.x;
-        o.y[i] = p.y[i] - s.a.y;
-        o.z[i] = p.z[i] - s.a.z;
-        o.scale[i] = 1.0f;
-      }
-      break;
-    case ShapeKind::kSphylinder:
-      for (int i = 0; i < m; ++i) {
-        const float apx = p.x[i] - s.a.x, apy = p.y[i] - s.a.y, apz = p.z[i] - s.a.z;
-        const float t =
-            std::clamp(apx * s.axis.x + apy * s.axis.y + apz * s.axis.z, 0.0f, s.length);
-        along_axis(i, apx, apy, apz, t);
-        o.scale[i] = 1.0f;
-      }
-      break;
-    case ShapeKind::kConeSphere:
-      for (int i = 0; i < m; ++i) {
-        const float apx = p.x[i] - s.a.x, apy = p.y[i] - s.a.y, apz = p.z[i] - s.a.z;
-        const float x = apx * s.axis.x + apy * s.axis.y + apz * s.axis.z;
-        const float y2 = std::max(apx * apx + apy * apy + apz * apz - x * x, 0.0f);
-        const float k = s.cone_slope;
-        const float rx = s.radius_a + k * x;
-        const float inside = std::clamp(x + k * y2 / rx, 0.0f, s.length);  // used when rx > 0
-        const float z = rx > 0.0f ? inside : (k > 0.0f ? s.length : 0.0f);
-        o.scale[i] = 1.0f / (s.radius_a + k * z);
-        along_axis(i, apx, apy, apz, z);
-      }
-      break;
-    case ShapeKind::kOffsetPolygon:
-      if (s.rectangle) {
-        for (int i = 0; i < m; ++i) {
-          const float rx = p.x[i] - s.a.x, ry = p.y[i] - s.a.y, rz = p.z[i] - s.a.z;
-          const float cx =
-              std::clamp(rx * s.u.x + ry * s.u.y + rz * s.u.z, s.rect_min.x, s.rect_max.x);
-          const float cy =
-              std::clamp(rx * s.v.x + ry * s.v.y + rz * s.v.z, s.rect_min.y, s.rect_max.y);
-          o.x[i] = rx - cx * s.u.x - cy * s.v.x;
-          o.y[i] = ry - cx * s.u.y - cy * s.v.y;
-          o.z[i] = rz - cx * s.u.z - cy * s.v.z;
-          o.scale[i] = 1.0f;
-        }
-      } else {
-        for (int i = 0; i < m; ++i) {
-          const glm::vec3 d = polygonOffset(s, glm::vec3(p.x[i], p.y[i], p.z[i]));
-          o.x[i] = d.x;
-          o.y[i] = d.y;
-          o.z[i] = d.z;
-          o.scale[i] = 1.0f;
-        }
-      }
-      break;
-  }
+  skeletonOffsets(col.posed->shape, m, p.x, p.y, p.z, o.x, o.y, o.z, o.scale);
   const Bounds& c = col.cull;
   for (int i = 0; i < m; ++i) {
     o.len[i] = std::sqrt(o.x[i] * o.x[i] + o.y[i] * o.y[i] + o.z[i] * o.z[i]);

@@ -53,6 +53,74 @@ glm::vec3 polygonOffset(const Shape& s, const glm::vec3& p) {
   return r - c.x * s.u - c.y * s.v;
 }
 
+void skeletonOffsets(const Shape& s, int count, const float* __restrict x,
+                     const float* __restrict y, const float* __restrict z, float* __restrict ox,
+                     float* __restrict oy, float* __restrict oz, float* __restrict scale) {
+  // The shape's numbers as locals: the stores below could otherwise alias them, and the
+  // loops would not vectorise.
+  const float a0 = s.a.x, a1 = s.a.y, a2 = s.a.z;
+  const float e0 = s.axis.x, e1 = s.axis.y, e2 = s.axis.z;
+  const float length = s.length, k = s.cone_slope, radius_a = s.radius_a;
+  const auto along_axis = [&](int i, float apx, float apy, float apz, float t) {
+    ox[i] = apx - t * e0;
+    oy[i] = apy - t * e1;
+    oz[i] = apz - t * e2;
+  };
+  switch (s.kind) {
+    case ShapeKind::kSphere:  // sphereOffset
+      for (int i = 0; i < count; ++i) {
+        ox[i] = x[i] - a0;
+        oy[i] = y[i] - a1;
+        oz[i] = z[i] - a2;
+        scale[i] = 1.0f;
+      }
+      return;
+    case ShapeKind::kSphylinder:  // segmentOffset
+      for (int i = 0; i < count; ++i) {
+        const float apx = x[i] - a0, apy = y[i] - a1, apz = z[i] - a2;
+        const float t = std::clamp(apx * e0 + apy * e1 + apz * e2, 0.0f, length);
+        along_axis(i, apx, apy, apz, t);
+        scale[i] = 1.0f;
+      }
+      return;
+    case ShapeKind::kConeSphere:  // coneOffset
+      for (int i = 0; i < count; ++i) {
+        const float apx = x[i] - a0, apy = y[i] - a1, apz = z[i] - a2;
+        const float ax = apx * e0 + apy * e1 + apz * e2;
+        const float y2 = std::max(apx * apx + apy * apy + apz * apz - ax * ax, 0.0f);
+        const float rx = radius_a + k * ax;
+        const float within = std::clamp(ax + k * y2 / rx, 0.0f, length);  // when rx > 0
+        const float t = rx > 0.0f ? within : (k > 0.0f ? length : 0.0f);
+        scale[i] = 1.0f / (radius_a + k * t);
+        along_axis(i, apx, apy, apz, t);
+      }
+      return;
+    case ShapeKind::kOffsetPolygon:
+      if (s.rectangle) {  // rectangleOffset
+        const float u0 = s.u.x, u1 = s.u.y, u2 = s.u.z, v0 = s.v.x, v1 = s.v.y, v2 = s.v.z;
+        const float x0 = s.rect_min.x, x1 = s.rect_max.x, y0 = s.rect_min.y, y1 = s.rect_max.y;
+        for (int i = 0; i < count; ++i) {
+          const float rx = x[i] - a0, ry = y[i] - a1, rz = z[i] - a2;
+          const float cx = std::clamp(rx * u0 + ry * u1 + rz * u2, x0, x1);
+          const float cy = std::clamp(rx * v0 + ry * v1 + rz * v2, y0, y1);
+          ox[i] = rx - cx * u0 - cy * v0;
+          oy[i] = ry - cx * u1 - cy * v1;
+          oz[i] = rz - cx * u2 - cy * v2;
+          scale[i] = 1.0f;
+        }
+        return;
+      }
+      break;
+  }
+  for (int i = 0; i < count; ++i) {
+    const glm::vec3 d = polygonOffset(s, glm::vec3(x[i], y[i], z[i]));
+    ox[i] = d.x;
+    oy[i] = d.y;
+    oz[i] = d.z;
+    scale[i] = 1.0f;
+  }
+}
+
 void prepareShape(Shape& s) {
   const glm::vec3 d = s.b - s.a;
   s.length = glm::length(d);

@@ -168,6 +168,15 @@ inline glm::vec3 skeletonOffset(const Shape& s, const glm::vec3& p, float& scale
   return polygonOffset(s, p);
 }
 
+// skeletonOffset for `count` points given as coordinate arrays, into offset coordinate
+// arrays and scales: the same operations in the same order as the kernels above, so the same
+// values bit for bit, as loops without branches that a compiler can vectorise (the cone's
+// division is made for every point and used only where its radius is positive; a polygon
+// other than a rectangle goes point by point). No two of the arrays may overlap.
+void skeletonOffsets(const Shape& s, int count, const float* __restrict x,
+                     const float* __restrict y, const float* __restrict z, float* __restrict ox,
+                     float* __restrict oy, float* __restrict oz, float* __restrict scale);
+
 inline float skeletonDistance(const Shape& s, const glm::vec3& p, glm::vec3* gradient) {
   float scale;
   const glm::vec3 d = skeletonOffset(s, p, scale);
