@@ -42,11 +42,6 @@ constexpr float kGrazeCos = 0.95f;
 constexpr std::uint32_t kPatchSize = 32;
 constexpr int kPatchesPerTask = 16;
 
-inline bool insideBox(const Bounds& b, const glm::vec3& p) {
-  return p.x >= b.min.x && p.x <= b.max.x && p.y >= b.min.y && p.y <= b.max.y && p.z >= b.min.z &&
-         p.z <= b.max.z;
-}
-
 float shareOf(float k_self, float k_other) {  // 1 - lambda, lambda = k_self / (k_self + k_other)
   const bool rigid_self = std::isinf(k_self);
   const bool rigid_other = std::isinf(k_other);
@@ -588,18 +583,18 @@ void passPenetration(Frame& fr, int first, int last) {
     }
     Listed described[kMaxListed];
     PatchPoints pts;
+    const auto point = [&](int i, std::uint32_t v) {
+      pts.vertex[i] = v;
+      pts.x[i] = pos[v].x;
+      pts.y[i] = pos[v].y;
+      pts.z[i] = pos[v].z;
+      pts.margin[i] = kCullMargin + std::abs(st.offset[v]);
+      pts.w[i] = cal.w[v];
+    };
     if (n > 0) {
       describeList(fr, key, list, n, described);
       pts.count = static_cast<int>(e - b);
-      for (std::uint32_t i = b; i < e; ++i) {
-        const std::uint32_t v = st.order[i];
-        pts.vertex[i - b] = v;
-        pts.x[i - b] = pos[v].x;
-        pts.y[i - b] = pos[v].y;
-        pts.z[i - b] = pos[v].z;
-        pts.margin[i - b] = kCullMargin + std::abs(st.offset[v]);
-        pts.w[i - b] = cal.w[v];
-      }
+      for (std::uint32_t i = b; i < e; ++i) point(static_cast<int>(i - b), st.order[i]);
       findCandidates(fr, pts, {described, static_cast<std::size_t>(n)});
       continue;
     }
@@ -618,12 +613,7 @@ void passPenetration(Frame& fr, int first, int last) {
       if (nv < 0) nv = kMaxListed;  // more near one vertex than a list holds: the first ones
       describeList(fr, pr, list, nv, described);
       pts.count = 1;
-      pts.vertex[0] = v;
-      pts.x[0] = pos[v].x;
-      pts.y[0] = pos[v].y;
-      pts.z[0] = pos[v].z;
-      pts.margin[0] = kCullMargin + std::abs(st.offset[v]);
-      pts.w[0] = cal.w[v];
+      point(0, v);
       findCandidates(fr, pts, {described, static_cast<std::size_t>(nv)});
       if (nv == kMaxListed) st.cand_count[v] |= 0x80;
     }
