@@ -170,7 +170,8 @@ inline glm::vec3 skeletonOffset(const Shape& s, const glm::vec3& p, float& scale
 
 // skeletonOffset for `count` points given as coordinate arrays, into offset coordinate
 // arrays and scales: the same operations in the same order as the kernels above, so the same
-// values bit for bit, as loops without branches that a compiler can vectorise (the cone's
+// values (bit for bit where the compiler fuses no multiply-adds in either; x86-64 without FMA,
+// as built here), as loops without branches that a compiler can vectorise (the cone's
 // division is made for every point and used only where its radius is positive; a polygon
 // other than a rectangle goes point by point). No two of the arrays may overlap.
 void skeletonOffsets(const Shape& s, int count, const float* __restrict x,
