@@ -637,9 +637,12 @@ inline void markReshaped(const Frame& fr, int v) {
   const Calibration& cal = fr.model->calibration;
   DeformState& st = *fr.st;
   const auto vi = static_cast<std::size_t>(v);
-  std::atomic_ref<std::uint8_t>(st.dirty[vi]).store(1, std::memory_order_relaxed);
-  for (std::uint32_t k = cal.ring_offsets[vi]; k < cal.ring_offsets[vi + 1]; ++k) {
-    std::atomic_ref<std::uint8_t>(st.dirty[cal.ring[k]]).store(1, std::memory_order_relaxed);
+  std::uint8_t* const dirty = st.dirty.data();  // a local: see passSolve
+  const std::uint32_t* const ring = cal.ring.data();
+  const std::uint32_t end = cal.ring_offsets[vi + 1];
+  std::atomic_ref<std::uint8_t>(dirty[vi]).store(1, std::memory_order_relaxed);
+  for (std::uint32_t k = cal.ring_offsets[vi]; k < end; ++k) {
+    std::atomic_ref<std::uint8_t>(dirty[ring[k]]).store(1, std::memory_order_relaxed);
   }
 }
 
@@ -896,22 +899,37 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
   const DeformOptions& opt = *fr.opt;
   VertexProblem vp;
   const Calibration& cal = fr.model->calibration;
+  // The arrays the per-vertex test and the rigid vertices use, as locals: through the
+  // vectors, every byte store (flags) would make the compiler load their addresses again.
+  const std::uint8_t* const rigid = cal.rigid.data();
+  const VertexClass* const vertex_class = cal.vertex_class.data();
+  const float* const memory = st.memory.data();
+  const std::uint8_t* const cand_count = st.cand_count.data();
+  const glm::vec3* const rigid_positions = fr.in->rigid_positions.data();
+  const glm::vec3* const rigid_normals = fr.in->rigid_normals.data();
+  float* const offset = st.offset.data();
+  float* const free_offset = st.free_offset.data();
+  glm::vec3* const positions = st.positions.data();
+  glm::vec3* const directions = st.directions.data();
+  std::int16_t* const contact_body = st.contact_body.data();
+  std::uint8_t* const vertex_flags = st.flags.data();
+  const bool along_normal = opt.projection == ProjectionMode::kNormal;
   for (int v = first; v < last; ++v) {
     const auto vi = static_cast<std::size_t>(v);
     // A rigid limb vertex with nothing near it is on its surface by construction; so is a
     // free vertex (its own field is a plane through its rigid position).
-    const bool fixed = (cal.rigid[vi] != 0 || cal.vertex_class[vi] == VertexClass::kFree) &&
-                       st.memory[vi] == 0.0f && opt.projection == ProjectionMode::kNormal;
-    const bool listed = (st.cand_count[vi] & 0x7F) != 0;
+    const bool fixed = (rigid[vi] != 0 || vertex_class[vi] == VertexClass::kFree) &&
+                       memory[vi] == 0.0f && along_normal;
+    const bool listed = (cand_count[vi] & 0x7F) != 0;
     if (!fixed && solveLoneLimb(fr, v, cnt)) continue;
     if (listed || !fixed) gatherProblem(fr, v, true, vp);
     if (fixed && (!listed || vp.ncand == 0)) {
-      st.offset[vi] = 0.0f;
-      st.free_offset[vi] = 0.0f;
-      st.positions[vi] = fr.in->rigid_positions[vi];
-      st.directions[vi] = fr.in->rigid_normals[vi];
-      st.contact_body[vi] = -1;
-      st.flags[vi] = 0;
+      offset[vi] = 0.0f;
+      free_offset[vi] = 0.0f;
+      positions[vi] = rigid_positions[vi];
+      directions[vi] = rigid_normals[vi];
+      contact_body[vi] = -1;
+      vertex_flags[vi] = 0;
       ++cnt.rigid_vertices;
       continue;
     }
