@@ -543,10 +543,15 @@ void passPenetration(Frame& fr, int first, int last) {
   const Calibration& cal = fr.model->calibration;
   const auto pos = fr.in->rigid_positions;
   std::uint16_t list[kMaxListed];
-  const auto clear = [&st](std::size_t vi) {
-    st.cand_count[vi] = 0;
-    st.depth[vi] = 0.0f;
-    st.pressure[vi] = 0.0f;
+  // Locals: through the vectors, each byte store would make the compiler load the addresses
+  // again.
+  std::uint8_t* const cand_count = st.cand_count.data();
+  float* const depth = st.depth.data();
+  float* const pressure = st.pressure.data();
+  const auto clear = [=](std::size_t vi) {
+    cand_count[vi] = 0;
+    depth[vi] = 0.0f;
+    pressure[vi] = 0.0f;
   };
   for (int q = first; q < last; ++q) {
     const std::uint32_t b = st.patch_offsets[static_cast<std::size_t>(q)];
@@ -1048,6 +1053,10 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
       if (m < 0.0f) s_out = s_free + std::min(m, c);
     }
     s_out = writeSolved(fr, v, vp.p0, dir, s_sol, s_out, flags, partner, cnt);
+    if ((vertex_flags[vi] & kVertexContact) != 0) {  // for passContacts, in vertex order
+      st.contact_list[static_cast<std::size_t>(first + cnt.contact_vertices - 1)] =
+          static_cast<std::uint32_t>(v);
+    }
     const bool relax = opt.relax_passes > 0 && (flags & (kVertexUnsolved | kVertexHeld)) == 0 &&
                        vp.cls == VertexClass::kJoint &&
                        (std::abs(s_out) > opt.relax_min_offset || (flags & kVertexGradient) != 0);
@@ -1229,8 +1238,9 @@ void passNormals(Frame& fr, int first, int last) {
   }
 }
 
-// Step 3b: contact areas and forces per partner (serial, fixed order).
-void passContacts(Frame& fr) {
+// Step 3b: contact areas and forces per partner (serial, fixed order: the chunks' contact
+// lists one after the other, each in vertex order).
+void passContacts(Frame& fr, int chunks) {
   DeformState& st = *fr.st;
   const auto idx = fr.in->indices;
   st.contacts.clear();
@@ -1242,32 +1252,35 @@ void passContacts(Frame& fr) {
     st.contacts.back().partner = partner;
     return st.contacts.back();
   };
-  for (int v = 0; v < fr.nvert; ++v) {
-    const auto vi = static_cast<std::size_t>(v);
-    const int partner = st.contact_body[vi];
-    if (partner < 0) continue;
-    BodyContact& bc = entry(partner);
-    ++bc.vertices;
-    bc.max_depth = std::max(bc.max_depth, static_cast<double>(st.depth[vi]));
-    // Each contact face once: from its lowest vertex.
-    for (std::uint32_t k = st.vf_offsets[vi]; k < st.vf_offsets[vi + 1]; ++k) {
-      const std::size_t f = 3u * st.vf_faces[k];
-      const std::uint32_t a = idx[f], b = idx[f + 1], c = idx[f + 2];
-      if (std::min({a, b, c}) != static_cast<std::uint32_t>(v)) continue;
-      if (st.contact_body[b] != partner || st.contact_body[c] != partner ||
-          st.contact_body[a] != partner) {
-        continue;
+  for (int chunk = 0; chunk < chunks; ++chunk) {
+    const int first = chunk * fr.chunk;
+    const int count = st.chunk_counters[static_cast<std::size_t>(chunk)].contact_vertices;
+    for (int i = 0; i < count; ++i) {
+      const std::uint32_t v = st.contact_list[static_cast<std::size_t>(first + i)];
+      const int partner = st.contact_body[v];
+      BodyContact& bc = entry(partner);
+      ++bc.vertices;
+      bc.max_depth = std::max(bc.max_depth, static_cast<double>(st.depth[v]));
+      // Each contact face once: from its lowest vertex.
+      for (std::uint32_t k = st.vf_offsets[v]; k < st.vf_offsets[v + 1]; ++k) {
+        const std::size_t f = 3u * st.vf_faces[k];
+        const std::uint32_t a = idx[f], b = idx[f + 1], c = idx[f + 2];
+        if (std::min({a, b, c}) != v) continue;
+        if (st.contact_body[b] != partner || st.contact_body[c] != partner ||
+            st.contact_body[a] != partner) {
+          continue;
+        }
+        const glm::dvec3 pa(st.positions[a]), pb(st.positions[b]), pc(st.positions[c]);
+        const glm::dvec3 cr = glm::cross(pb - pa, pc - pa);
+        const double twice_area = glm::length(cr);
+        if (!(twice_area > 0.0)) continue;
+        const double area = 0.5 * twice_area;
+        const double p_mean =
+            (static_cast<double>(st.pressure[a]) + st.pressure[b] + st.pressure[c]) / 3.0;
+        bc.force -= (p_mean * area / twice_area) * cr;
+        bc.area += area;
+        bc.centre += area * (pa + pb + pc) / 3.0;
       }
-      const glm::dvec3 pa(st.positions[a]), pb(st.positions[b]), pc(st.positions[c]);
-      const glm::dvec3 cr = glm::cross(pb - pa, pc - pa);
-      const double twice_area = glm::length(cr);
-      if (!(twice_area > 0.0)) continue;
-      const double area = 0.5 * twice_area;
-      const double p_mean =
-          (static_cast<double>(st.pressure[a]) + st.pressure[b] + st.pressure[c]) / 3.0;
-      bc.force -= (p_mean * area / twice_area) * cr;
-      bc.area += area;
-      bc.centre += area * (pa + pb + pc) / 3.0;
     }
   }
   for (BodyContact& bc : st.contacts) {
@@ -1413,6 +1426,7 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
   st.flags.assign(nv, 0);
   st.relaxed.assign(nv, glm::vec3(0.0f));
   st.relax_list.assign(nv, 0);
+  st.contact_list.assign(nv, 0);
   st.cand_count.assign(nv, 0);
   st.dirty.assign(nv, 0);
   st.cand_collider.assign(nv * kMaxCandidates, 0);
@@ -1565,7 +1579,7 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
     passNormals(fr, b, e);
   };
   parallelFor(pool, chunks, normals);
-  passContacts(fr);
+  passContacts(fr, chunks);
 
   // Counters, reduced in chunk order.
   DeformCounters total;

@@ -198,6 +198,8 @@ struct DeformState {
   std::vector<glm::vec3> relaxed;                   // relaxation pass output (nvert)
   std::vector<std::uint32_t> relax_list;            // (nvert) the vertices to relax, each
                                                     // chunk's from its first vertex on
+  std::vector<std::uint32_t> contact_list;          // (nvert) the vertices in contact, each
+                                                    // chunk's from its first vertex on
   std::vector<glm::vec3> directions;                // projection direction used (nvert)
   std::vector<std::uint32_t> smooth_pool;           // joint vertices and the free ones
                                                     // beside them (init)
