@@ -919,6 +919,10 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
   std::int16_t* const contact_body = st.contact_body.data();
   std::uint8_t* const vertex_flags = st.flags.data();
   const bool along_normal = opt.projection == ProjectionMode::kNormal;
+  // Every vertex's rigid position and direction in two copies; the vertices solved below
+  // overwrite theirs.
+  std::copy(rigid_positions + first, rigid_positions + last, positions + first);
+  std::copy(rigid_normals + first, rigid_normals + last, directions + first);
   for (int v = first; v < last; ++v) {
     const auto vi = static_cast<std::size_t>(v);
     // A rigid limb vertex with nothing near it is on its surface by construction; so is a
@@ -931,8 +935,6 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
     if (fixed && (!listed || vp.ncand == 0)) {
       offset[vi] = 0.0f;
       free_offset[vi] = 0.0f;
-      positions[vi] = rigid_positions[vi];
-      directions[vi] = rigid_normals[vi];
       contact_body[vi] = -1;
       vertex_flags[vi] = 0;
       ++cnt.rigid_vertices;
