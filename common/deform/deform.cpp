@@ -404,13 +404,13 @@ void findCandidates(const Frame& fr, const PatchPoints& pts, std::span<const Lis
         }
         if (l.always_entry && !always) continue;  // another vertex's pair
       }
-      // The skeleton distance d and its gradient (as skeletonDistance), keeping the offset.
+      // The skeleton distance d (as skeletonDistance), keeping the offset; its gradient gd
+      // below, where the vertex penetrates.
       const glm::vec3 p0(pts.x[i], pts.y[i], pts.z[i]);
       const glm::vec3 offset(off.x[i], off.y[i], off.z[i]);
       const float scale = off.scale[i];
       const float len = off.len[i];
       const float d = len * scale;
-      const glm::vec3 gd = len > 0.0f ? offset * (scale / len) : glm::vec3(0.0f);
       const float k_other = prim.stiffness;
       // A collider matters only where its term can be non-zero (see lowestTerm). Bound x over
       // the points within the cull margin of where the vertex was solved last frame (its
@@ -453,6 +453,7 @@ void findCandidates(const Frame& fr, const PatchPoints& pts, std::span<const Lis
       const float x = omega * f - iso;
       if (!(x > 0.0f)) continue;
       atomicMaxBits(col.pmax_bits, x);
+      const glm::vec3 gd = len > 0.0f ? offset * (scale / len) : glm::vec3(0.0f);
       const float gn = omega * prim.weight * std::abs(fp) * prim.inv_r_out * glm::length(gd);
       const float depth = gn > 0.0f ? x / gn : 0.0f;
       if (depth > best_depth[i] && depth > kMinContactDepth) {
