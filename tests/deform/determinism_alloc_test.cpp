@@ -1,5 +1,6 @@
-// Replaying gives the same deformed vertices with 1 and 2 threads (STYLE.md
-// "Reproducible"), and the per-frame loop allocates nothing after warm-up.
+// Replaying gives the same deformed vertices and contacts (forces, areas) with 1 and 2
+// threads and any chunk size (STYLE.md "Reproducible"), and the per-frame loop allocates
+// nothing after warm-up.
 
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
@@ -13,8 +14,22 @@ namespace {
 
 using test::Scene;
 
+// Folds a body's contacts into h, field by field (BodyContact has padding).
+std::uint64_t hashContacts(const std::vector<BodyContact>& contacts, std::uint64_t h) {
+  for (const BodyContact& c : contacts) {
+    h = fnv1a64(&c.partner, sizeof c.partner, h);
+    h = fnv1a64(&c.vertices, sizeof c.vertices, h);
+    h = fnv1a64(&c.force, sizeof c.force, h);
+    h = fnv1a64(&c.area, sizeof c.area, h);
+    h = fnv1a64(&c.centre, sizeof c.centre, h);
+    h = fnv1a64(&c.max_depth, sizeof c.max_depth, h);
+  }
+  return h;
+}
+
 // A clip: the elbow bends from 0 to 150 degrees while a soft ball slides along the
-// forearm and presses into it; returns the hash of every frame's deformed vertices.
+// forearm and presses into it; returns the hash of every frame's deformed vertices and
+// contacts.
 std::uint64_t replay(TaskPool* pool, int chunk) {
   auto arm = test::armBody();
   BallSpec spec;
@@ -27,6 +42,7 @@ std::uint64_t replay(TaskPool* pool, int chunk) {
   scene.pool = pool;
   scene.options.chunk_size = chunk;
   std::uint64_t h = kFnvOffset;
+  double contact_area = 0.0;
   for (int f = 0; f < 24; ++f) {
     const float t = static_cast<float>(f) / 23.0f;
     test::bendArm(*arm, glm::radians(150.0f) * t);
@@ -35,8 +51,12 @@ std::uint64_t replay(TaskPool* pool, int chunk) {
     scene.step(f / 30.0);
     h = hashSpan<glm::vec3>(arm->state.positions, h);
     h = hashSpan<glm::vec3>(ball->state.positions, h);
+    h = hashContacts(arm->state.contacts, h);
+    h = hashContacts(ball->state.contacts, h);
+    contact_area += arm->state.contacts.empty() ? 0.0 : arm->state.contacts[0].area;
   }
   EXPECT_GT(arm->state.counters.contact_vertices, 0);
+  EXPECT_GT(contact_area, 0.0);  // the contacts hashed are not empty
   return h;
 }
 
