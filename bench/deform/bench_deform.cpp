@@ -8,8 +8,11 @@
 // covers all the frames (the time column is per iteration; seconds_per_frame per frame).
 // Counters: vertices_per_second (vertices deformed or skinned per second); for the
 // deformation also iterations_per_vertex (mean root-finding iterations over the vertices
-// that iterate), unsolved and contact vertices per frame.
+// that iterate), unsolved and contact vertices per frame, and where a frame's time goes
+// (step1_seconds, then pass_a, pass_b, relax, smooth, normals and contacts _seconds: wall time
+// per frame of Step 1 and of each phase of Steps 2-3, DeformOptions::time_phases).
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -246,22 +249,30 @@ void deformBench(benchmark::State& state, Scene* s) {
   std::int64_t smoothed = 0;
   std::int64_t evaluations = 0, rigid = 0, candidates = 0, relaxed = 0, relax_iterations = 0;
   const double dt = 1.0 / 30.0;
+  DeformOptions options;
+  options.time_phases = true;  // a clock read between phases
+  DeformPhaseTimes phases;     // summed over the frames
+  double step1_seconds = 0.0;
   for (auto _ : state) {
     for (const Frame& fr : s->frames) {
       // Step 1.
+      const auto step1_start = std::chrono::steady_clock::now();
       posePrimitives(s->model.primitives, fr.skin, posed);
       const glm::mat4 ball_xf[1] = {fr.ball};
       posePrimitives(s->ball, ball_xf, ball_posed);
       const BodyView views[2] = {{&s->model.graph, &posed}, {&s->ball_graph, &ball_posed}};
       buildInteractions(views, scratch, list);
+      step1_seconds +=
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - step1_start).count();
       // Steps 2-3.
       DeformInput in;
       in.rigid_positions = fr.rigid_pos;
       in.rigid_normals = fr.rigid_nrm;
       in.indices = s->avatar.skin.indices;
       in.time = static_cast<double>(frames) * dt;
-      deformSkin(s->model, views, 0, list, in, ds);
+      deformSkin(s->model, views, 0, list, in, ds, options);
       benchmark::DoNotOptimize(ds.positions.data());
+      phases += ds.counters.phase_seconds;
       iterations += ds.counters.iterations;
       iterating += ds.counters.iterating_vertices;
       unsolved += ds.counters.unsolved_vertices;
@@ -293,6 +304,15 @@ void deformBench(benchmark::State& state, Scene* s) {
   state.counters["rigid_per_frame"] = static_cast<double>(rigid) / nf;
   state.counters["candidate_vertices_per_frame"] = static_cast<double>(candidates) / nf;
   state.counters["relaxed_per_frame"] = static_cast<double>(relaxed) / nf;
+  // Where a frame's time goes (seconds per frame, wall time): Step 1, then the phases of
+  // Steps 2-3 (DeformPhaseTimes).
+  state.counters["step1_seconds"] = step1_seconds / nf;
+  state.counters["pass_a_seconds"] = phases.penetration / nf;
+  state.counters["pass_b_seconds"] = phases.solve / nf;
+  state.counters["relax_seconds"] = phases.relax / nf;
+  state.counters["smooth_seconds"] = phases.smooth / nf;
+  state.counters["normals_seconds"] = phases.normals / nf;
+  state.counters["contacts_seconds"] = phases.contacts / nf;
   state.SetLabel(s->avatar_name);
 }
 

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <atomic>
 #include <bit>
+#include <chrono>
 #include <cmath>
 
 #include "common/deform/vertex_field.hpp"
@@ -1511,6 +1512,17 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
   st.time = in.time;
   st.started = true;
 
+  // Phase timing (DeformOptions::time_phases): lap(t) adds the time since the last lap to t.
+  using Clock = std::chrono::steady_clock;
+  DeformPhaseTimes times;
+  Clock::time_point mark = opt.time_phases ? Clock::now() : Clock::time_point();
+  const auto lap = [&](double& phase) {
+    if (!opt.time_phases) return;
+    const Clock::time_point now = Clock::now();
+    phase += std::chrono::duration<double>(now - mark).count();
+    mark = now;
+  };
+
   // Setup: colliders of this body, per own primitive.
   buildColliders(fr, interactions);
   const int chunks = (fr.nvert + fr.chunk - 1) / fr.chunk;
@@ -1537,6 +1549,8 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
     std::fill(st.cand_count.begin(), st.cand_count.end(), std::uint8_t{0});
   }
 
+  lap(times.penetration);
+
   std::fill(st.dirty.begin(), st.dirty.end(), std::uint8_t{0});
 
   // Pass B: Step 2 proper.
@@ -1545,6 +1559,7 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
     passSolve(fr, b, e, st.chunk_counters[static_cast<std::size_t>(c)]);
   };
   parallelFor(pool, chunks, pass_b);
+  lap(times.solve);
 
   // Relaxation passes (Jacobi: read positions, write relaxed, then copy back).
   for (int pass = 0; pass < opt.relax_passes; ++pass) {
@@ -1567,8 +1582,11 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
     parallelFor(pool, chunks, copy);
   }
 
+  lap(times.relax);
+
   // Smoothing the joint regions' corrections.
   const int smoothed = opt.smooth_passes > 0 ? smoothCorrections(fr) : 0;
+  lap(times.smooth);
 
   // Step 3: normals, then contacts and forces.
   const int nface = static_cast<int>(st.face_cross.size());
@@ -1582,7 +1600,9 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
     passNormals(fr, b, e);
   };
   parallelFor(pool, chunks, normals);
+  lap(times.normals);
   passContacts(fr, chunks);
+  lap(times.contacts);
 
   // Counters, reduced in chunk order.
   DeformCounters total;
@@ -1603,6 +1623,7 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
     total.max_offset = std::max(total.max_offset, k.max_offset);
   }
   total.smoothed_vertices = smoothed;
+  total.phase_seconds = times;
   st.counters = total;
 }
 

@@ -81,6 +81,8 @@ struct DeformOptions {
                                       // correction per pass
   int chunk_size = 512;               // vertices per parallel task (results do not depend on it
                                       // nor on the thread count)
+  bool time_phases = false;           // measure each phase's wall time (DeformCounters::
+                                      // phase_seconds; a clock read between phases)
 };
 
 struct DeformInput {
@@ -88,6 +90,26 @@ struct DeformInput {
   std::span<const glm::vec3> rigid_normals;    // skinned unit normals (nvert), world
   std::span<const std::uint32_t> indices;      // the skin's triangles (3 * ntri)
   double time = 0.0;                           // seconds; drives viscoelastic recovery
+};
+
+// Wall time of each phase of one deformSkin call, seconds (see DeformOptions::time_phases).
+struct DeformPhaseTimes {
+  double penetration = 0.0;  // the colliders, then pass A: candidates, rigid-pose penetrations
+  double solve = 0.0;        // pass B: Step 2's root-finding, vertex by vertex
+  double relax = 0.0;        // tangential relaxation
+  double smooth = 0.0;       // smoothing the joint regions' corrections
+  double normals = 0.0;      // Step 3a
+  double contacts = 0.0;     // Step 3b: contact areas and forces
+
+  DeformPhaseTimes& operator+=(const DeformPhaseTimes& o) {
+    penetration += o.penetration;
+    solve += o.solve;
+    relax += o.relax;
+    smooth += o.smooth;
+    normals += o.normals;
+    contacts += o.contacts;
+    return *this;
+  }
 };
 
 // Per-frame counters (reset by each deformSkin).
@@ -111,6 +133,7 @@ struct DeformCounters {
   int candidate_vertices = 0;         // vertices with at least one collision candidate
   int rigid_vertices = 0;             // rigid limb vertices with nothing near: no evaluation
   float max_offset = 0.0f;            // largest |P' - P| (m)
+  DeformPhaseTimes phase_seconds;     // with DeformOptions::time_phases; else zeros
 
   // Mean iterations over the vertices that iterate (the paper reports 2-3).
   double iterationsPerVertex() const {

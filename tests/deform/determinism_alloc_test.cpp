@@ -2,6 +2,8 @@
 // threads and any chunk size (STYLE.md "Reproducible"), and the per-frame loop allocates
 // nothing after warm-up.
 
+#include <chrono>
+
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -67,6 +69,45 @@ TEST(Determinism, SameHashWithOneAndTwoThreads) {
   EXPECT_EQ(replay(&two, 512), serial);
   EXPECT_EQ(replay(&two, 64), serial);
   EXPECT_EQ(replay(&two, 100), serial);
+}
+
+// DeformOptions::time_phases: the phases' wall times when asked (each one measured, together
+// within the call's), zeros otherwise, and the same deformation either way.
+TEST(PhaseTimes, MeasuredOnlyWhenAskedAndChangeNothing) {
+  const auto run = [](bool timed, DeformPhaseTimes& times, double& wall) {
+    auto arm = test::armBody();
+    BallSpec spec;
+    spec.radius = 0.05f;
+    spec.stiffness = 2.0e4f;
+    auto ball = test::ballBody(spec, glm::vec3(0.45f, 0.08f, 0.0f));
+    Scene scene;
+    scene.bodies = {arm.get(), ball.get()};
+    scene.options.time_phases = timed;
+    test::bendArm(*arm, glm::radians(140.0f));  // a crease to relax and smooth, and contact
+    const auto start = std::chrono::steady_clock::now();
+    scene.step(0.0);
+    wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    times = arm->state.counters.phase_seconds;
+    EXPECT_GT(arm->state.counters.contact_vertices, 0);
+    EXPECT_GT(arm->state.counters.relaxed_vertices, 0);
+    return hashSpan<glm::vec3>(arm->state.positions);
+  };
+  DeformPhaseTimes off, on;
+  double wall_off = 0.0, wall_on = 0.0;
+  const std::uint64_t plain = run(false, off, wall_off);
+  const std::uint64_t timed = run(true, on, wall_on);
+  EXPECT_EQ(plain, timed);
+  for (const double t :
+       {off.penetration, off.solve, off.relax, off.smooth, off.normals, off.contacts}) {
+    EXPECT_EQ(t, 0.0);
+  }
+  for (const double t : {on.penetration, on.solve, on.relax, on.smooth, on.normals, on.contacts}) {
+    EXPECT_GE(t, 0.0);
+  }
+  EXPECT_GT(on.penetration, 0.0);
+  EXPECT_GT(on.solve, 0.0);
+  EXPECT_GT(on.relax, 0.0);
+  EXPECT_LE(on.penetration + on.solve + on.relax + on.smooth + on.normals + on.contacts, wall_on);
 }
 
 TEST(Allocation, NoHeapAllocationPerFrameAfterWarmUp) {
