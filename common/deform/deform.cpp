@@ -1575,8 +1575,11 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
       for (int k = 0; k < n; ++k) {
         const std::uint32_t v = st.relax_list[static_cast<std::size_t>(b + k)];
         st.positions[v] = st.relaxed[v];
-        st.flags[v] |= kVertexReshaped;
-        markReshaped(fr, static_cast<int>(v));
+        // Its ring needs new normals: marked once a frame (a reshaped vertex is marked).
+        if ((st.flags[v] & kVertexReshaped) == 0) {
+          st.flags[v] |= kVertexReshaped;
+          markReshaped(fr, static_cast<int>(v));
+        }
       }
     };
     parallelFor(pool, chunks, copy);
