@@ -77,6 +77,7 @@ struct Candidate {
 struct VertexProblem {
   VertexClass cls = VertexClass::kLimb;
   const PosedPrimitive* own[4] = {nullptr, nullptr, nullptr, nullptr};  // p0, p1, p2, bone
+  const FieldLanes* lanes = nullptr;  // own[0..3] packed (DeformState::own_lanes), or null
   float w = 1.0f;
   float slope = 0.0f;
   float iso = 0.5f;
@@ -108,26 +109,42 @@ inline float ownExcess(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
     vp.smooth_gradient = grad;
     return -vp.slope * glm::dot(p - vp.anchor, vp.n0);
   }
-  glm::vec3 g0;
-  float d = primitiveField(*vp.own[0], p, &g0);
+  const bool joint = vp.cls == VertexClass::kJoint;
+  const bool bone = vp.own[3] != nullptr;
+  // The own fields: in one pass where they are packed (the same values), else one by one.
+  float f[4];
+  glm::vec3 gf[4];
+  if (vp.lanes != nullptr) {
+    FieldValues lanes;
+    fieldLanes(*vp.lanes, p, lanes);
+    for (int k = 0; k < 4; ++k) {
+      f[k] = lanes.f[k];
+      gf[k] = glm::vec3(lanes.gx[k], lanes.gy[k], lanes.gz[k]);
+    }
+  } else {
+    f[0] = primitiveField(*vp.own[0], p, &gf[0]);
+    if (joint) {
+      f[1] = primitiveField(*vp.own[1], p, &gf[1]);
+      f[2] = primitiveField(*vp.own[2], p, &gf[2]);
+    }
+    if (bone) f[3] = primitiveField(*vp.own[3], p, &gf[3]);
+  }
+  float d = f[0];
+  glm::vec3 g0 = gf[0];
   float own_side = d;
   glm::vec3 smooth = g0;
-  if (vp.cls == VertexClass::kJoint) {
-    glm::vec3 ga, gb, gd;
-    const float fa = primitiveField(*vp.own[1], p, &ga);
-    const float fb = primitiveField(*vp.own[2], p, &gb);
-    d += diffField(fa, ga, fb, gb, vp.diff_exponent, &gd);
+  if (joint) {
+    glm::vec3 gd;
+    d += diffField(f[1], gf[1], f[2], gf[2], vp.diff_exponent, &gd);
     g0 += gd;
-    smooth += ga;
-    own_side += fa;
+    smooth += gf[1];
+    own_side += f[1];
   }
-  if (vp.own[3] != nullptr) {
-    glm::vec3 gbone;
-    const float fbone = primitiveField(*vp.own[3], p, &gbone);
-    d += fbone;
-    g0 += gbone;
-    smooth += gbone;
-    own_side += fbone;
+  if (bone) {
+    d += f[3];
+    g0 += gf[3];
+    smooth += gf[3];
+    own_side += f[3];
   }
   grad = vp.w * g0;
   vp.smooth_gradient = vp.w * smooth;
@@ -234,6 +251,10 @@ void gatherOwn(const Frame& fr, int v, VertexProblem& vp) {
   for (std::size_t k = 0; k < 4; ++k) {
     vp.own[k] = pr[k] >= 0 ? &fr.posed->items[static_cast<std::size_t>(pr[k])] : nullptr;
   }
+  const std::int16_t set = fr.st->lane_set[vi];
+  vp.lanes = set >= 0 && fr.st->lane_set_packed[static_cast<std::size_t>(set)] != 0
+                 ? &fr.st->own_lanes[static_cast<std::size_t>(set)]
+                 : nullptr;
   vp.w = cal.w[vi];
   vp.slope = cal.slope[vi];
   vp.iso = m.primitives.iso;
@@ -1409,6 +1430,41 @@ void buildPatches(const Calibration& cal, DeformState& st) {
 
 }  // namespace
 
+// The sets of own primitives evaluated together (see DeformState::own_lanes): one per
+// distinct (p0, p1, p2, bone) of the joint vertices and of the limb vertices with a bone.
+void buildLaneSets(const Calibration& cal, DeformState& st) {
+  const std::size_t nv = cal.vertex_class.size();
+  st.lane_set.assign(nv, -1);
+  st.lane_set_prims.clear();
+  for (std::size_t v = 0; v < nv; ++v) {
+    const auto& pr = cal.prims[v];
+    const bool joint = cal.vertex_class[v] == VertexClass::kJoint;
+    const bool limb_bone = cal.vertex_class[v] == VertexClass::kLimb && pr[3] >= 0;
+    if ((!joint && !limb_bone) || pr[0] < 0) continue;
+    const auto found = std::find(st.lane_set_prims.begin(), st.lane_set_prims.end(), pr);
+    if (found == st.lane_set_prims.end() && st.lane_set_prims.size() >= 0x7FFF) continue;
+    st.lane_set[v] = static_cast<std::int16_t>(found - st.lane_set_prims.begin());
+    if (found == st.lane_set_prims.end()) st.lane_set_prims.push_back(pr);
+  }
+  st.own_lanes.assign(st.lane_set_prims.size(), FieldLanes{});
+  st.lane_set_packed.assign(st.lane_set_prims.size(), 0);
+}
+
+// Packs every lane set from this frame's posed primitives (a set with a primitive the lanes
+// do not cover stays unpacked: its vertices evaluate their fields one by one).
+void packLaneSets(Frame& fr) {
+  DeformState& st = *fr.st;
+  for (std::size_t i = 0; i < st.lane_set_prims.size(); ++i) {
+    bool packed = true;
+    for (int k = 0; k < 4 && packed; ++k) {
+      const std::int16_t prim = st.lane_set_prims[i][static_cast<std::size_t>(k)];
+      packed = packFieldLane(prim >= 0 ? &fr.posed->items[static_cast<std::size_t>(prim)] : nullptr,
+                             k, st.own_lanes[i]);
+    }
+    st.lane_set_packed[i] = packed ? 1 : 0;
+  }
+}
+
 Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t> indices,
                        DeformState& st) {
   const int nvert = model.calibration.vertexCount();
@@ -1491,6 +1547,7 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
     st.vf_faces[fill[indices[i]]++] = static_cast<std::uint32_t>(i / 3);
   }
   buildPatches(model.calibration, st);
+  buildLaneSets(model.calibration, st);
   st.chunk_counters.assign(static_cast<std::size_t>((nvert + 511) / 512) + 1, DeformCounters{});
   return {};
 }
@@ -1523,8 +1580,9 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
     mark = now;
   };
 
-  // Setup: colliders of this body, per own primitive.
+  // Setup: colliders of this body, per own primitive; the own fields' lanes.
   buildColliders(fr, interactions);
+  packLaneSets(fr);
   const int chunks = (fr.nvert + fr.chunk - 1) / fr.chunk;
   if (st.chunk_counters.size() < static_cast<std::size_t>(chunks)) {
     st.chunk_counters.resize(static_cast<std::size_t>(chunks));

@@ -34,6 +34,7 @@
 // vertex); no heap allocation once the state has seen the scene's largest interaction list.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -41,6 +42,7 @@
 #include <glm/glm.hpp>
 
 #include "common/base/result.hpp"
+#include "common/deform/field_lanes.hpp"
 #include "common/deform/implicit_model.hpp"
 #include "common/deform/interactions.hpp"
 #include "common/deform/posed_primitives.hpp"
@@ -235,6 +237,12 @@ struct DeformState {
                                                     // a final Newton step of where) the last
                                                     // solve left them (NaN: not known)
   std::vector<DeformCounters> chunk_counters;
+  // The own primitives of joint vertices and of limb vertices with a bone, packed to be
+  // evaluated together (field_lanes.hpp): a set per distinct (p0, p1, p2, bone).
+  std::vector<std::int16_t> lane_set;                       // (nvert) the vertex's set, or -1
+  std::vector<std::array<std::int16_t, 4>> lane_set_prims;  // per set
+  std::vector<FieldLanes> own_lanes;                        // per set, packed each frame
+  std::vector<std::uint8_t> lane_set_packed;  // per set: 0 when a primitive is not covered
 };
 
 // Sizes a state for a model and its skin's triangles (validated: indices < nvert). The
