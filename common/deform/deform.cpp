@@ -768,19 +768,21 @@ RootResult solveVertex(VertexProblem& vp, glm::vec3& dir, float s_start, float g
     // position to there.
     bool escaped = false;
     if (len > 0.0f) {
-      inward /= len;
+      const glm::vec3 out = inward / len;
       auto eval_out = [&](float s, float* dg) {
         glm::vec3 gf;
-        const float f = primitiveField(*c.prim, p1 + s * inward, &gf);
-        *dg = -c.omega * glm::dot(gf, inward);
+        const float f = primitiveField(*c.prim, p1 + s * out, &gf);
+        *dg = -c.omega * glm::dot(gf, out);
         return c.iso - c.omega * f;
       };
       // Within the partner's support: however deep the vertex, its way out is that short.
-      const RootResult ro = findRoot(eval_out, 0.0f, std::max(reach, c.prim->reach), ropt);
-      cnt.evaluations += 1 + ro.iterations;
-      cnt.iterations += 1 + ro.iterations;
+      // It starts where the line search did (g1 at p1).
+      const RootResult ro = findRoot(eval_out, 0.0f, g1, -c.omega * glm::dot(inward, out),
+                                     std::max(reach, c.prim->reach), ropt);
+      cnt.evaluations += ro.iterations;
+      cnt.iterations += ro.iterations;
       if (ro.found && (!rh.found || std::abs(ro.s) < std::abs(rh.s - res.s))) {
-        const glm::vec3 moved = p1 + ro.s * inward - p0;
+        const glm::vec3 moved = p1 + ro.s * out - p0;
         const float dist = glm::length(moved);
         res.s = dist;
         if (dist > 0.0f) dir = moved / dist;
