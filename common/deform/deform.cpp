@@ -10,6 +10,7 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 
 #include "common/deform/vertex_field.hpp"
 
@@ -928,11 +929,8 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
   DeformState& st = *fr.st;
   const DeformOptions& opt = *fr.opt;
   VertexProblem vp;
-  const Calibration& cal = fr.model->calibration;
   // The arrays the per-vertex test and the rigid vertices use, as locals: through the
   // vectors, every byte store (flags) would make the compiler load their addresses again.
-  const std::uint8_t* const rigid = cal.rigid.data();
-  const VertexClass* const vertex_class = cal.vertex_class.data();
   const float* const memory = st.memory.data();
   const std::uint8_t* const cand_count = st.cand_count.data();
   const glm::vec3* const rigid_positions = fr.in->rigid_positions.data();
@@ -948,12 +946,56 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
   // overwrite theirs.
   std::copy(rigid_positions + first, rigid_positions + last, positions + first);
   std::copy(rigid_normals + first, rigid_normals + last, directions + first);
+  // A rigid limb vertex with nothing near it is on its surface by construction; so is a
+  // free vertex (its own field is a plane through its rigid position). Those without a
+  // candidate ("resting") are written for the whole chunk at once, in loops without branches
+  // (the compiler vectorises them); the others are listed for the loop below.
+  std::uint8_t* const resting = st.resting.data();
+  const std::uint8_t* const fixed_kind = st.fixed_kind.data();
+  const auto is_fixed = [&](std::size_t vi) {
+    return fixed_kind[vi] != 0 && memory[vi] == 0.0f && along_normal;
+  };
+  if (along_normal) {
+    for (int v = first; v < last; ++v) {
+      resting[v] = static_cast<std::uint8_t>(fixed_kind[v] & (memory[v] == 0.0f ? 1 : 0) &
+                                             ((cand_count[v] & 0x7F) == 0 ? 1 : 0));
+    }
+  } else {
+    std::fill(resting + first, resting + last, std::uint8_t{0});
+  }
+  for (int v = first; v < last; ++v) offset[v] = resting[v] != 0 ? 0.0f : offset[v];
+  for (int v = first; v < last; ++v) free_offset[v] = resting[v] != 0 ? 0.0f : free_offset[v];
   for (int v = first; v < last; ++v) {
+    contact_body[v] = resting[v] != 0 ? std::int16_t{-1} : contact_body[v];
+  }
+  for (int v = first; v < last; ++v) {
+    vertex_flags[v] = resting[v] != 0 ? std::uint8_t{0} : vertex_flags[v];
+  }
+  // The list, eight resting vertices (a word of ones) at a time.
+  std::uint32_t* const work = st.solve_list.data() + first;
+  int nwork = 0;
+  int next = first;
+  const auto list = [&](int end) {
+    for (; next < end; ++next) {
+      work[nwork] = static_cast<std::uint32_t>(next);
+      nwork += resting[next] ^ 1;
+    }
+  };
+  while (next + 8 <= last) {
+    std::uint64_t word;
+    std::memcpy(&word, resting + next, sizeof word);
+    if (word == 0x0101010101010101ull) {
+      next += 8;
+    } else {
+      list(next + 8);
+    }
+  }
+  list(last);
+  cnt.rigid_vertices += (last - first) - nwork;
+  for (int k = 0; k < nwork; ++k) {
+    const int v = static_cast<int>(work[k]);
     const auto vi = static_cast<std::size_t>(v);
-    // A rigid limb vertex with nothing near it is on its surface by construction; so is a
-    // free vertex (its own field is a plane through its rigid position).
-    const bool fixed = (rigid[vi] != 0 || vertex_class[vi] == VertexClass::kFree) &&
-                       memory[vi] == 0.0f && along_normal;
+    const bool fixed = is_fixed(vi);
     const bool listed = (cand_count[vi] & 0x7F) != 0;
     if (!fixed && solveLoneLimb(fr, v, cnt)) continue;
     if (listed || !fixed) gatherProblem(fr, v, true, vp);
@@ -1489,6 +1531,15 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
   st.relaxed.assign(nv, glm::vec3(0.0f));
   st.relax_list.assign(nv, 0);
   st.contact_list.assign(nv, 0);
+  st.resting.assign(nv, 0);
+  st.fixed_kind.resize(nv);
+  for (std::size_t v = 0; v < nv; ++v) {
+    st.fixed_kind[v] =
+        (model.calibration.rigid[v] != 0 || model.calibration.vertex_class[v] == VertexClass::kFree)
+            ? 1
+            : 0;
+  }
+  st.solve_list.assign(nv, 0);
   st.cand_count.assign(nv, 0);
   st.dirty.assign(nv, 0);
   st.cand_collider.assign(nv * kMaxCandidates, 0);
