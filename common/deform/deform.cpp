@@ -97,6 +97,37 @@ struct VertexProblem {
   float own_side = 0.0f;  // w_v (F_p0 + F_p1 + F_bone) at the last evaluation (see ownExcess)
 };
 
+// ownExcess's sum for a limb or joint vertex, given field(k, grad) -> F of own[k] at p and
+// its gradient.
+template <typename Field>
+inline float ownSum(VertexProblem& vp, glm::vec3& grad, Field&& field) {
+  glm::vec3 g0;
+  float d = field(0, g0);
+  float own_side = d;
+  glm::vec3 smooth = g0;
+  if (vp.cls == VertexClass::kJoint) {
+    glm::vec3 ga, gb, gd;
+    const float fa = field(1, ga);
+    const float fb = field(2, gb);
+    d += diffField(fa, ga, fb, gb, vp.diff_exponent, &gd);
+    g0 += gd;
+    smooth += ga;
+    own_side += fa;
+  }
+  if (vp.own[3] != nullptr) {
+    glm::vec3 gbone;
+    const float fbone = field(3, gbone);
+    d += fbone;
+    g0 += gbone;
+    smooth += gbone;
+    own_side += fbone;
+  }
+  grad = vp.w * g0;
+  vp.smooth_gradient = vp.w * smooth;
+  vp.own_side = vp.w * own_side;
+  return vp.w * d - vp.iso;
+}
+
 // w_v D_v(P) - T (or the free vertex's planar excess) and its gradient; also the outward
 // direction of the vertex's own side without the crease (DIFF's gradient is singular where
 // the two limbs' fields are equal): vp.smooth_gradient = grad(F_p0 + F_p1 + F_bone) w_v, and
@@ -110,47 +141,17 @@ inline float ownExcess(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
     vp.smooth_gradient = grad;
     return -vp.slope * glm::dot(p - vp.anchor, vp.n0);
   }
-  const bool joint = vp.cls == VertexClass::kJoint;
-  const bool bone = vp.own[3] != nullptr;
-  // The own fields: in one pass where they are packed (the same values), else one by one.
-  float f[4];
-  glm::vec3 gf[4];
+  // The own fields in one pass where they are packed (the same values), else one by one.
   if (vp.lanes != nullptr) {
     FieldValues lanes;
     fieldLanes(*vp.lanes, p, lanes);
-    for (int k = 0; k < 4; ++k) {
-      f[k] = lanes.f[k];
-      gf[k] = glm::vec3(lanes.gx[k], lanes.gy[k], lanes.gz[k]);
-    }
-  } else {
-    f[0] = primitiveField(*vp.own[0], p, &gf[0]);
-    if (joint) {
-      f[1] = primitiveField(*vp.own[1], p, &gf[1]);
-      f[2] = primitiveField(*vp.own[2], p, &gf[2]);
-    }
-    if (bone) f[3] = primitiveField(*vp.own[3], p, &gf[3]);
+    return ownSum(vp, grad, [&lanes](int k, glm::vec3& g) {
+      g = glm::vec3(lanes.gx[k], lanes.gy[k], lanes.gz[k]);
+      return lanes.f[k];
+    });
   }
-  float d = f[0];
-  glm::vec3 g0 = gf[0];
-  float own_side = d;
-  glm::vec3 smooth = g0;
-  if (joint) {
-    glm::vec3 gd;
-    d += diffField(f[1], gf[1], f[2], gf[2], vp.diff_exponent, &gd);
-    g0 += gd;
-    smooth += gf[1];
-    own_side += f[1];
-  }
-  if (bone) {
-    d += f[3];
-    g0 += gf[3];
-    smooth += gf[3];
-    own_side += f[3];
-  }
-  grad = vp.w * g0;
-  vp.smooth_gradient = vp.w * smooth;
-  vp.own_side = vp.w * own_side;
-  return vp.w * d - vp.iso;
+  return ownSum(vp, grad,
+                [&vp, &p](int k, glm::vec3& g) { return primitiveField(*vp.own[k], p, &g); });
 }
 
 // The soft part of Step 2's equation, g(P) = w_v D_v(P) - T + sum_i COLL_i with the
