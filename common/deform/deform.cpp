@@ -839,7 +839,6 @@ inline float writeSolved(const Frame& fr, int v, const glm::vec3& p0, const glm:
   const auto vi = static_cast<std::size_t>(v);
   if (std::abs(s_out) < kSnapOffset) s_out = 0.0f;
   st.offset[vi] = s_sol;
-  st.directions[vi] = dir;
   st.positions[vi] = p0 + s_out * dir;
   if (s_out != 0.0f) flags |= kVertexMoved;
   if (std::abs(s_out) > kReshapeOffset) {
@@ -935,18 +934,14 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
   const float* const memory = st.memory.data();
   const std::uint8_t* const cand_count = st.cand_count.data();
   const glm::vec3* const rigid_positions = fr.in->rigid_positions.data();
-  const glm::vec3* const rigid_normals = fr.in->rigid_normals.data();
   float* const offset = st.offset.data();
   float* const free_offset = st.free_offset.data();
   glm::vec3* const positions = st.positions.data();
-  glm::vec3* const directions = st.directions.data();
   std::int16_t* const contact_body = st.contact_body.data();
   std::uint8_t* const vertex_flags = st.flags.data();
   const bool along_normal = opt.projection == ProjectionMode::kNormal;
-  // Every vertex's rigid position and direction in two copies; the vertices solved below
-  // overwrite theirs.
+  // Every vertex's rigid position in one copy; the vertices solved below overwrite theirs.
   std::copy(rigid_positions + first, rigid_positions + last, positions + first);
-  std::copy(rigid_normals + first, rigid_normals + last, directions + first);
   // A rigid limb vertex with nothing near it is on its surface by construction; so is a
   // free vertex (its own field is a plane through its rigid position). Those without a
   // candidate ("resting") are written for the whole chunk at once, in loops without branches
@@ -1547,7 +1542,6 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
   st.cand_iso.assign(nv * kMaxCandidates, 0.0f);
   st.cand_reach.assign(nv * kMaxCandidates, 0.0f);
   st.cand_omega.assign(nv * kMaxCandidates, 1.0f);
-  st.directions.assign(nv, glm::vec3(0.0f));
   st.field_gradient.assign(nv, glm::vec3(NAN));
   // Joint vertices, and free vertices beside them (a vertex of a joint region demoted at
   // calibration): the vertices the smoothing of corrections may move.

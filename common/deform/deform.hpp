@@ -229,7 +229,6 @@ struct DeformState {
   std::vector<std::uint8_t> resting;                // pass B: fixed, nothing near (nvert)
   std::vector<std::uint32_t> solve_list;            // (nvert) the others, each chunk's from
                                                     // its first vertex on
-  std::vector<glm::vec3> directions;                // projection direction used (nvert)
   std::vector<std::uint32_t> smooth_pool;           // joint vertices and the free ones
                                                     // beside them (init)
   std::vector<std::uint32_t> smooth_list;           // those smoothed this frame (capacity:
