@@ -542,20 +542,23 @@ void gatherProblem(const Frame& fr, int v, bool with_bulge, VertexProblem& vp) {
 // vertices: where x = omega F_i - iso stays at or below lowestTerm everywhere within the cull
 // margin (grown by the patch's largest warm-start offset) of the patch's box, bounded with the
 // collider's largest skin weight and the set's iso (pair isos are higher). Returns the new count.
-int keepReachable(const Frame& fr, const Bounds& box, float offset_max,
+int keepReachable(const Frame& fr, const Bounds& box, float offset_max, float w_max,
                   std::uint16_t (&list)[kMaxListed], int n) {
   const DeformState& st = *fr.st;
-  const PrimitiveSet& set = fr.model->primitives;
   const glm::vec3 centre = 0.5f * (box.min + box.max);
   const float radius = 0.5f * glm::length(box.max - box.min) + kCullMargin + offset_max;
   int kept = 0;
   for (int i = 0; i < n; ++i) {
     const DeformState::Collider& col = st.colliders[list[i] & ~kAlwaysEntry];
     const PosedPrimitive& prim = *col.posed;
-    const float omega = std::isinf(prim.stiffness) ? 1.0f : prim.max_skin_weight;
+    // A part of the vertices' own body may be scaled by their own weight (see findCandidates).
+    const float omega =
+        std::isinf(prim.stiffness)
+            ? 1.0f
+            : (col.body == fr.self ? std::max(prim.max_skin_weight, w_max) : prim.max_skin_weight);
     const float d = skeletonDistance(prim.shape, centre);
     const float r_near = std::max(d - radius * col.inv_unit, 0.0f) * prim.inv_r_out;
-    const float x_near = omega * prim.weight * densityValue(prim.density, r_near) - set.iso;
+    const float x_near = omega * prim.weight * densityValue(prim.density, r_near) - st.iso_floor;
     if (x_near > lowestTerm(fr, col)) list[kept++] = list[i];
   }
   return kept;
@@ -606,7 +609,9 @@ void passPenetration(Frame& fr, int first, int last) {
       offset_max = std::max(offset_max, std::abs(st.offset[v]));
     }
     int n = listColliders(fr, {key[0], key[1], key[2], kNoPrimitive}, always, box, list);
-    if (n > 0) n = keepReachable(fr, box, offset_max, list, n);
+    if (n > 0) {
+      n = keepReachable(fr, box, offset_max, st.patch_max_w[static_cast<std::size_t>(q)], list, n);
+    }
     if (n == 0) {
       for (std::uint32_t i = b; i < e; ++i) clear(st.order[i]);
       continue;
@@ -1409,6 +1414,7 @@ void buildPatches(const Calibration& cal, DeformState& st) {
   st.order.clear();
   st.order.reserve(nv);
   st.patch_offsets.assign(1, 0);
+  st.patch_max_w.clear();
   st.patch_always_offsets.assign(1, 0);
   st.patch_always.clear();
   const auto same_key = [&cal](std::uint32_t a, std::uint32_t b) {
@@ -1464,6 +1470,11 @@ void buildPatches(const Calibration& cal, DeformState& st) {
       }
     }
     st.patch_offsets.push_back(static_cast<std::uint32_t>(st.order.size()));
+    float w_max = 0.0f;
+    for (std::size_t i = st.patch_offsets[st.patch_offsets.size() - 2]; i < st.order.size(); ++i) {
+      w_max = std::max(w_max, cal.w[st.order[i]]);
+    }
+    st.patch_max_w.push_back(w_max);
     st.patch_always_offsets.push_back(static_cast<std::uint32_t>(st.patch_always.size()));
   }
 }
@@ -1528,6 +1539,8 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
   st.relax_list.assign(nv, 0);
   st.contact_list.assign(nv, 0);
   st.resting.assign(nv, 0);
+  st.iso_floor = model.primitives.iso;
+  for (const VertexPair& p : model.calibration.pairs) st.iso_floor = std::min(st.iso_floor, p.iso);
   st.fixed_kind.resize(nv);
   for (std::size_t v = 0; v < nv; ++v) {
     st.fixed_kind[v] =

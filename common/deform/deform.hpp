@@ -207,6 +207,7 @@ struct DeformState {
   std::vector<std::uint32_t> patch_offsets;         // (npatch + 1) into order
   std::vector<std::uint32_t> patch_always_offsets;  // (npatch + 1) into patch_always
   std::vector<std::int16_t> patch_always;           // always-pair primitives per patch
+  std::vector<float> patch_max_w;                   // (npatch) largest calibration weight
   std::vector<std::uint8_t> cand_count;             // candidates per vertex (nvert; bit 7:
                                                     // more were dropped)
   std::vector<std::uint16_t> cand_collider;         // (nvert * kMaxCandidates)
@@ -225,20 +226,21 @@ struct DeformState {
                                                     // chunk's from its first vertex on
   std::vector<std::uint32_t> contact_list;          // (nvert) the vertices in contact, each
                                                     // chunk's from its first vertex on
-  std::vector<std::uint8_t> fixed_kind;             // rigid limb or free vertex (nvert)
-  std::vector<std::uint8_t> resting;                // pass B: fixed, nothing near (nvert)
-  std::vector<std::uint32_t> solve_list;            // (nvert) the others, each chunk's from
-                                                    // its first vertex on
-  std::vector<std::uint32_t> smooth_pool;           // joint vertices and the free ones
-                                                    // beside them (init)
-  std::vector<std::uint32_t> smooth_list;           // those smoothed this frame (capacity:
-                                                    // the pool's size)
-  std::vector<glm::vec3> correction;                // their corrections (nvert), and the
-  std::vector<glm::vec3> correction_next;           // next pass's (Jacobi)
-  std::vector<std::uint8_t> smooth_mark;            // in smooth_list (nvert; 0 between frames)
-  std::vector<glm::vec3> field_gradient;            // relaxed vertices: grad g where (or within
-                                                    // a final Newton step of where) the last
-                                                    // solve left them (NaN: not known)
+  float iso_floor = 0.5f;  // the lowest threshold: the set's iso or a pair's (pass A's bounds)
+  std::vector<std::uint8_t> fixed_kind;    // rigid limb or free vertex (nvert)
+  std::vector<std::uint8_t> resting;       // pass B: fixed, nothing near (nvert)
+  std::vector<std::uint32_t> solve_list;   // (nvert) the others, each chunk's from
+                                           // its first vertex on
+  std::vector<std::uint32_t> smooth_pool;  // joint vertices and the free ones
+                                           // beside them (init)
+  std::vector<std::uint32_t> smooth_list;  // those smoothed this frame (capacity:
+                                           // the pool's size)
+  std::vector<glm::vec3> correction;       // their corrections (nvert), and the
+  std::vector<glm::vec3> correction_next;  // next pass's (Jacobi)
+  std::vector<std::uint8_t> smooth_mark;   // in smooth_list (nvert; 0 between frames)
+  std::vector<glm::vec3> field_gradient;   // relaxed vertices: grad g where (or within
+                                           // a final Newton step of where) the last
+                                           // solve left them (NaN: not known)
   std::vector<DeformCounters> chunk_counters;
   // The own primitives of joint vertices and of limb vertices with a bone, packed to be
   // evaluated together (field_lanes.hpp): a set per distinct (p0, p1, p2, bone).
