@@ -541,7 +541,8 @@ void gatherProblem(const Frame& fr, int v, bool with_bulge, VertexProblem& vp) {
 // Drops from a patch's collider list the colliders that cannot matter to any of its
 // vertices: where x = omega F_i - iso stays at or below lowestTerm everywhere within the cull
 // margin (grown by the patch's largest warm-start offset) of the patch's box, bounded with the
-// collider's largest skin weight and the set's iso (pair isos are higher). Returns the new count.
+// largest omega a vertex of the patch can give the collider (w_max: the patch's largest
+// calibration weight) and the model's lowest threshold. Returns the new count.
 int keepReachable(const Frame& fr, const Bounds& box, float offset_max, float w_max,
                   std::uint16_t (&list)[kMaxListed], int n) {
   const DeformState& st = *fr.st;
