@@ -415,19 +415,7 @@ void findCandidates(const Frame& fr, const PatchPoints& pts, std::span<const Lis
       if (off.near[i] == 0) continue;
       const std::uint32_t v = pts.vertex[i];
       const auto vi = static_cast<std::size_t>(v);
-      const auto& pr = cal.prims[vi];
-      float iso = m.primitives.iso;
-      bool always = false;
-      if (l.same) {
-        if (!l.always_entry && col.prim == pr[3]) continue;  // its own bone
-        for (std::uint32_t q = cal.pair_offsets[vi]; q < cal.pair_offsets[vi + 1]; ++q) {
-          if (cal.pairs[q].prim == col.prim) {
-            iso = cal.pairs[q].iso;
-            always = always || (cal.pairs[q].flags & kPairAlways) != 0;
-          }
-        }
-        if (l.always_entry && !always) continue;  // another vertex's pair
-      }
+      if (l.same && !l.always_entry && col.prim == cal.prims[vi][3]) continue;  // its own bone
       // The skeleton distance d (as skeletonDistance), keeping the offset; its gradient gd
       // below, where the vertex penetrates.
       const glm::vec3 p0(pts.x[i], pts.y[i], pts.z[i]);
@@ -443,6 +431,25 @@ void findCandidates(const Frame& fr, const PatchPoints& pts, std::span<const Lis
       const float r_near = std::max(d - margin * col.inv_unit, 0.0f) * prim.inv_r_out;
       const float density_near = densityValue(prim.density, r_near);
       const float lowest = l.lowest;
+      // First with the largest scale omega (below) the vertex can give the partner's field
+      // and the model's lowest threshold: most colliders are settled before the vertex's
+      // pairs are looked up.
+      const float omega_bound =
+          l.rigid ? 1.0f
+                  : (l.same ? (l.adjacent ? pts.w[i] : std::max(pts.w[i], prim.max_skin_weight))
+                            : prim.max_skin_weight);
+      if (!(omega_bound * prim.weight * density_near - st.iso_floor > lowest)) continue;
+      float iso = m.primitives.iso;
+      bool always = false;
+      if (l.same) {
+        for (std::uint32_t q = cal.pair_offsets[vi]; q < cal.pair_offsets[vi + 1]; ++q) {
+          if (cal.pairs[q].prim == col.prim) {
+            iso = cal.pairs[q].iso;
+            always = always || (cal.pairs[q].flags & kPairAlways) != 0;
+          }
+        }
+        if (l.always_entry && !always) continue;  // another vertex's pair
+      }
       // The partner field's scale: 1 for a rigid partner; the vertex's own weight for a
       // neighbouring part of its body (joined to one of its primitives through a joint: the
       // two skins meet at a crease calibrated at rest); else the partner's skin weight (first
