@@ -1771,6 +1771,7 @@ float vertexFunction(const ImplicitModel& model, std::span<const BodyView> bodie
   fr.nvert = model.calibration.vertexCount();
   VertexProblem vp;
   gatherProblem(fr, v, true, vp);
+  vp.lanes = nullptr;  // the own fields from `bodies` themselves (the same values)
   glm::vec3 grad;
   const float g = evaluate(vp, p, grad);
   if (gradient != nullptr) *gradient = grad;
