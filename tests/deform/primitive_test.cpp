@@ -157,12 +157,9 @@ glm::vec3 centre(const Shape& s) {
              : (s.kind == ShapeKind::kOffsetPolygon ? s.a : 0.5f * (s.a + s.b));
 }
 
-// The batched kernel (pass A's) against the per-point one, on random points (far ones, and
-// behind a cone's apex), the skeleton's own points, and a rectangle slab besides the shapes
-// above: the same values, bit for bit where the compiler fuses no multiply-adds (x86-64
-// without FMA, as built here).
-TEST(Primitive, BatchedOffsetsMatchThePerPointKernel) {
-  std::vector<Shape> all = shapes();
+// Two shapes the kernels treat apart: a rectangular slab turned in the world, and a cone
+// whose apex lies close behind its small end.
+std::vector<Shape> slabAndSteepCone() {
   Shape rect;
   rect.kind = ShapeKind::kOffsetPolygon;
   rect.a = glm::vec3(0.0f, 1.2f, 0.05f);
@@ -171,17 +168,27 @@ TEST(Primitive, BatchedOffsetsMatchThePerPointKernel) {
   rect.polygon[1] = {0.15f, -0.25f};
   rect.polygon[2] = {0.15f, 0.2f};
   rect.polygon[3] = {-0.15f, 0.2f};
+  rect.u = glm::normalize(glm::vec3(1.0f, 0.3f, -0.2f));
+  rect.v = glm::normalize(glm::cross(glm::vec3(0.2f, 0.1f, 1.0f), rect.u));
   prepareShape(rect);
-  ASSERT_TRUE(rect.rectangle);
-  all.push_back(rect);
-  Shape steep;  // a cone whose apex lies close behind its small end
+  Shape steep;
   steep.kind = ShapeKind::kConeSphere;
   steep.a = glm::vec3(0.0f);
   steep.b = glm::vec3(0.0f, 0.0f, 0.1f);
   steep.radius_a = 0.01f;
   steep.radius_b = 0.08f;
   prepareShape(steep);
-  all.push_back(steep);
+  return {rect, steep};
+}
+
+// The batched kernel (pass A's) against the per-point one, on random points (far ones, and
+// behind a cone's apex), the skeleton's own points, and a turned slab besides the shapes
+// above: the same values, bit for bit where the compiler fuses no multiply-adds (x86-64
+// without FMA, as built here).
+TEST(Primitive, BatchedOffsetsMatchThePerPointKernel) {
+  std::vector<Shape> all = shapes();
+  for (const Shape& s : slabAndSteepCone()) all.push_back(s);
+  ASSERT_TRUE(all[all.size() - 2].rectangle);
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> u(-0.5f, 0.5f);
   constexpr int kCount = 37;  // not a multiple of any vector width
@@ -224,26 +231,8 @@ TEST(Primitive, FieldLanesMatchPrimitiveField) {
   ASSERT_FALSE(all.back().rectangle);  // the general polygon
   const Shape general = all.back();
   all.pop_back();
-  Shape rect;
-  rect.kind = ShapeKind::kOffsetPolygon;
-  rect.a = glm::vec3(0.0f, 1.2f, 0.05f);
-  rect.polygon_count = 4;
-  rect.polygon[0] = {-0.15f, -0.25f};
-  rect.polygon[1] = {0.15f, -0.25f};
-  rect.polygon[2] = {0.15f, 0.2f};
-  rect.polygon[3] = {-0.15f, 0.2f};
-  rect.u = glm::normalize(glm::vec3(1.0f, 0.3f, -0.2f));  // a slab turned in the world
-  rect.v = glm::normalize(glm::cross(glm::vec3(0.2f, 0.1f, 1.0f), rect.u));
-  prepareShape(rect);
-  ASSERT_TRUE(rect.rectangle);
-  all.push_back(rect);
-  Shape steep;  // a cone whose apex lies close behind its small end
-  steep.kind = ShapeKind::kConeSphere;
-  steep.b = glm::vec3(0.0f, 0.0f, 0.1f);
-  steep.radius_a = 0.01f;
-  steep.radius_b = 0.08f;
-  prepareShape(steep);
-  all.push_back(steep);
+  for (const Shape& s : slabAndSteepCone()) all.push_back(s);
+  ASSERT_TRUE(all[all.size() - 2].rectangle);
   std::vector<PosedPrimitive> posed;
   for (const Shape& s : all) {
     Primitive prim;
