@@ -64,7 +64,8 @@ float effectiveStiffness(float k_self, float k_other) {  // springs in series
 
 struct Candidate {
   const PosedPrimitive* prim = nullptr;
-  float omega = 1.0f;  // partner field scale: its skin weight (see cand_omega), 1 when rigid
+  float omega =
+      1.0f;  // partner field scale: its skin weight (see CandidateSlot::omega), 1 when rigid
   float iso = 0.5f;    // the pair's threshold
   float share = 0.5f;  // 1 - lambda: how much of the contact this vertex takes
   float rho = 1.0f;    // (1 - lambda) / lambda: weight of the penetration term (lambda > 0)
@@ -471,10 +472,11 @@ void findCandidates(const Frame& fr, const PatchPoints& pts, std::span<const Lis
         continue;
       }
       const std::size_t slot = vi * kMaxCandidates + static_cast<std::size_t>(count[i]);
-      st.cand_collider[slot] = static_cast<std::uint16_t>(c);
-      st.cand_iso[slot] = iso;
-      st.cand_reach[slot] = x_near;
-      st.cand_omega[slot] = omega;
+      DeformState::CandidateSlot& cs = st.candidates[slot];
+      cs.iso = iso;
+      cs.reach = x_near;
+      cs.omega = omega;
+      cs.collider = static_cast<std::uint16_t>(c);
       ++count[i];
       // Rigid-pose penetration into this collider.
       const float r = d * prim.inv_r_out;
@@ -516,7 +518,8 @@ void loadCandidates(const Frame& fr, int v, bool with_bulge, VertexProblem& vp) 
   int kept = 0;
   for (int i = 0; i < n; ++i) {
     const std::size_t slot = vi * kMaxCandidates + static_cast<std::size_t>(i);
-    const int c = st.cand_collider[slot];
+    const DeformState::CandidateSlot& cs = st.candidates[slot];
+    const int c = cs.collider;
     const DeformState::Collider& col = st.colliders[static_cast<std::size_t>(c)];
     Candidate& cd = vp.cand[kept];
     cd.prim = col.posed;
@@ -526,15 +529,15 @@ void loadCandidates(const Frame& fr, int v, bool with_bulge, VertexProblem& vp) 
     // A free vertex has no field for the partner to meet: it takes the whole contact.
     cd.hard = cd.share == 1.0f || (vp.cls == VertexClass::kFree && cd.share > 0.0f);
     cd.rho = cd.hard ? 0.0f : cd.share / (1.0f - cd.share);
-    cd.omega = st.cand_omega[slot];
-    cd.iso = st.cand_iso[slot];
+    cd.omega = cs.omega;
+    cd.iso = cs.iso;
     cd.k_eff = effectiveStiffness(k_self, k_other);
     const float pmax = std::bit_cast<float>(col.pmax_bits);
     const bool bulges = with_bulge && (col.body != fr.self || fr.opt->self_propagation);
     cd.bulge = bulges ? 2.0f * cd.share * vp.w * amplitude * pmax : 0.0f;
     // Without a bulge only penetration and contact count: a candidate that stays outside
     // the partner's surface near the vertex contributes nothing.
-    if (cd.bulge > 0.0f || st.cand_reach[slot] >= -kContactTolerance) ++kept;
+    if (cd.bulge > 0.0f || cs.reach >= -kContactTolerance) ++kept;
   }
   vp.ncand = kept;
 }
@@ -1213,8 +1216,9 @@ bool collisionShaped(const Frame& fr, std::uint32_t v) {
   if ((st.cand_count[v] & 0x80) != 0) return true;  // more colliders than were listed
   if ((st.flags[v] & kVertexContact) != 0 || st.depth[v] > 0.0f) return true;
   for (int i = 0; i < n; ++i) {
-    const std::uint16_t c = st.cand_collider[static_cast<std::size_t>(v) * kMaxCandidates +
-                                             static_cast<std::size_t>(i)];
+    const std::uint16_t c =
+        st.candidates[static_cast<std::size_t>(v) * kMaxCandidates + static_cast<std::size_t>(i)]
+            .collider;
     if (st.colliders[c].body != fr.self || fr.opt->self_propagation) return true;
   }
   return false;
@@ -1559,10 +1563,7 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
   st.solve_list.assign(nv, 0);
   st.cand_count.assign(nv, 0);
   st.dirty.assign(nv, 0);
-  st.cand_collider.assign(nv * kMaxCandidates, 0);
-  st.cand_iso.assign(nv * kMaxCandidates, 0.0f);
-  st.cand_reach.assign(nv * kMaxCandidates, 0.0f);
-  st.cand_omega.assign(nv * kMaxCandidates, 1.0f);
+  st.candidates.assign(nv * kMaxCandidates, DeformState::CandidateSlot{});
   st.field_gradient.assign(nv, glm::vec3(NAN));
   // Joint vertices, and free vertices beside them (a vertex of a joint region demoted at
   // calibration): the vertices the smoothing of corrections may move.

@@ -210,22 +210,24 @@ struct DeformState {
   std::vector<float> patch_max_w;                   // (npatch) largest calibration weight
   std::vector<std::uint8_t> cand_count;             // candidates per vertex (nvert; bit 7:
                                                     // more were dropped)
-  std::vector<std::uint16_t> cand_collider;         // (nvert * kMaxCandidates)
-  std::vector<float> cand_iso;                      // (nvert * kMaxCandidates)
-  std::vector<float> cand_reach;                    // (nvert * kMaxCandidates) the largest
-                                                    // x = omega F_i - iso of the candidate
-                                                    // within the cull margin of the vertex
-  std::vector<float> cand_omega;                    // (nvert * kMaxCandidates) the partner
-                                                    // field's scale: its skin weight near
-                                                    // the vertex, 1 for a rigid partner
-  std::vector<std::uint8_t> dirty;                  // needs a new normal (nvert)
-  std::vector<glm::vec3> face_cross;                // twice the area-weighted normal of
-                                                    // faces with a dirty vertex (nface)
-  std::vector<glm::vec3> relaxed;                   // relaxation pass output (nvert)
-  std::vector<std::uint32_t> relax_list;            // (nvert) the vertices to relax, each
-                                                    // chunk's from its first vertex on
-  std::vector<std::uint32_t> contact_list;          // (nvert) the vertices in contact, each
-                                                    // chunk's from its first vertex on
+  // A vertex's candidate collider, with what pass A found of it (one struct, so that a
+  // vertex's candidates share a cache line or two).
+  struct CandidateSlot {
+    float iso = 0.5f;            // the pair's threshold
+    float reach = 0.0f;          // the largest x = omega F_i - iso within the vertex's cull margin
+    float omega = 1.0f;          // the partner field's scale: its skin weight near the vertex, 1
+                                 // for a rigid partner
+    std::uint16_t collider = 0;  // index into colliders
+  };
+  std::vector<CandidateSlot> candidates;    // (nvert * kMaxCandidates)
+  std::vector<std::uint8_t> dirty;          // needs a new normal (nvert)
+  std::vector<glm::vec3> face_cross;        // twice the area-weighted normal of
+                                            // faces with a dirty vertex (nface)
+  std::vector<glm::vec3> relaxed;           // relaxation pass output (nvert)
+  std::vector<std::uint32_t> relax_list;    // (nvert) the vertices to relax, each
+                                            // chunk's from its first vertex on
+  std::vector<std::uint32_t> contact_list;  // (nvert) the vertices in contact, each
+                                            // chunk's from its first vertex on
   float iso_floor = 0.5f;  // the lowest threshold: the set's iso or a pair's (pass A's bounds)
   std::vector<std::uint8_t> fixed_kind;    // rigid limb or free vertex (nvert)
   std::vector<std::uint8_t> resting;       // pass B: fixed, nothing near (nvert)
