@@ -976,7 +976,9 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
     std::fill(resting + first, resting + last, std::uint8_t{0});
   }
   for (int v = first; v < last; ++v) offset[v] = resting[v] != 0 ? 0.0f : offset[v];
-  for (int v = first; v < last; ++v) free_offset[v] = resting[v] != 0 ? 0.0f : free_offset[v];
+  if (st.any_inelastic) {  // (an elastic vertex's free offset is never read)
+    for (int v = first; v < last; ++v) free_offset[v] = resting[v] != 0 ? 0.0f : free_offset[v];
+  }
   for (int v = first; v < last; ++v) {
     contact_body[v] = resting[v] != 0 ? std::int16_t{-1} : contact_body[v];
   }
@@ -1551,6 +1553,9 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
   st.relax_list.assign(nv, 0);
   st.contact_list.assign(nv, 0);
   st.resting.assign(nv, 0);
+  st.any_inelastic =
+      std::any_of(model.primitives.items.begin(), model.primitives.items.end(),
+                  [](const Primitive& p) { return p.elasticity != Elasticity::kElastic; });
   st.iso_floor = model.primitives.iso;
   for (const VertexPair& p : model.calibration.pairs) st.iso_floor = std::min(st.iso_floor, p.iso);
   st.fixed_kind.resize(nv);

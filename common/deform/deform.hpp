@@ -170,7 +170,7 @@ struct DeformState {
   std::vector<float> offset;               // last solution along the projection direction (nvert),
                                            // the next frame's warm start (m)
   std::vector<float> free_offset;          // same without collision terms (nvert), plastic and
-                                           // viscoelastic bodies only (m)
+                                           // viscoelastic vertices only (m)
   std::vector<float> memory;               // elastic memory: the contact offset kept by plastic
                                            // and viscoelastic vertices (nvert, m, <= 0)
   std::vector<std::int16_t> contact_body;  // partner body per vertex, -1 none (nvert)
@@ -228,7 +228,8 @@ struct DeformState {
                                             // chunk's from its first vertex on
   std::vector<std::uint32_t> contact_list;  // (nvert) the vertices in contact, each
                                             // chunk's from its first vertex on
-  float iso_floor = 0.5f;  // the lowest threshold: the set's iso or a pair's (pass A's bounds)
+  bool any_inelastic = false;  // a primitive is plastic or viscoelastic (free_offset is kept)
+  float iso_floor = 0.5f;      // the lowest threshold: the set's iso or a pair's (pass A's bounds)
   std::vector<std::uint8_t> fixed_kind;    // rigid limb or free vertex (nvert)
   std::vector<std::uint8_t> resting;       // pass B: fixed, nothing near (nvert)
   std::vector<std::uint32_t> solve_list;   // (nvert) the others, each chunk's from
