@@ -233,7 +233,8 @@ Result<CalibrationReport> calibrateModel(ImplicitModel& model, std::span<const g
                               : (neighbour ? c.w[v] : skinWeight(rest.items[i], pos[v]));
       const float x = omega * primitiveField(rest.items[i], pos[v]);
       if (x > iso * (1.0f - opt.rest_margin)) {
-        c.pairs.push_back({ii, 0, x + iso * opt.rest_margin});
+        // At least the set's iso (which the file's validation asks), whatever the rounding.
+        c.pairs.push_back({ii, 0, std::max(iso, x + iso * opt.rest_margin)});
         ++report.rest_pairs;
       }
     }
