@@ -1194,11 +1194,11 @@ void passRelax(Frame& fr, int first, int count, DeformCounters& cnt) {
     const float own_side_start = vp.own_side;
     vp.p0 = q;
     bool iterated = false;
-    DeformCounters local;
+    const std::int64_t iterations = cnt.iterations;  // the projection's count as relaxation's
     const RootResult res =
-        solveVertex(vp, nu, 0.0f, g0, gq, searchReach(vp), opt.root, local, iterated);
-    cnt.evaluations += local.evaluations;
-    cnt.relax_iterations += local.iterations;
+        solveVertex(vp, nu, 0.0f, g0, gq, searchReach(vp), opt.root, cnt, iterated);
+    cnt.relax_iterations += cnt.iterations - iterations;
+    cnt.iterations = iterations;
     if (res.found && ownSideHolds(vp, own_side_start, q + res.s * nu, opt)) {
       st.relaxed[vi] = q + res.s * nu;
       st.field_gradient[vi] = gradientNear(vp, st.relaxed[vi], opt.root.final_step);
