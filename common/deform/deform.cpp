@@ -333,14 +333,16 @@ float lowestTerm(const Frame& fr, const DeformState::Collider& col) {
 
 // A collider list entry with what does not depend on the vertex (for vertices whose
 // defining primitives are the key the list was made for).
+// (No initialisers: a patch makes room for kMaxListed of them, and describeList fills each
+// one it uses.)
 struct Listed {
-  DeformState::Collider* col = nullptr;
-  std::uint16_t c = 0;        // collider index
-  bool always_entry = false;  // from an always-pair (see kAlwaysEntry)
-  bool same = false;          // the vertex's own body
-  bool adjacent = false;      // own body, joined to a key primitive in the graph
-  bool rigid = false;         // infinite stiffness
-  float lowest = 0.0f;        // lowestTerm
+  DeformState::Collider* col;
+  std::uint16_t c;    // collider index
+  bool always_entry;  // from an always-pair (see kAlwaysEntry)
+  bool same;          // the vertex's own body
+  bool adjacent;      // own body, joined to a key primitive in the graph
+  bool rigid;         // infinite stiffness
+  float lowest;       // lowestTerm
 };
 
 // Describes `n` entries of a collider list for vertices with defining primitives key[0..2].
