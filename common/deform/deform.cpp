@@ -435,13 +435,13 @@ void findCandidates(const Frame& fr, const PatchPoints& pts, std::span<const Lis
       const float density_near = densityValue(prim.density, r_near);
       const float lowest = l.lowest;
       // First with the largest scale omega (below) the vertex can give the partner's field
-      // and the model's lowest threshold: most colliders are settled before the vertex's
-      // pairs are looked up.
+      // and the set's iso (no pair's threshold is lower: VertexPair::iso, validated): most
+      // colliders are settled before the vertex's pairs are looked up.
       const float omega_bound =
           l.rigid ? 1.0f
                   : (l.same ? (l.adjacent ? pts.w[i] : std::max(pts.w[i], prim.max_skin_weight))
                             : prim.max_skin_weight);
-      if (!(omega_bound * prim.weight * density_near - st.iso_floor > lowest)) continue;
+      if (!(omega_bound * prim.weight * density_near - m.primitives.iso > lowest)) continue;
       float iso = m.primitives.iso;
       bool always = false;
       if (l.same) {
@@ -554,7 +554,7 @@ void gatherProblem(const Frame& fr, int v, bool with_bulge, VertexProblem& vp) {
 // vertices: where x = omega F_i - iso stays at or below lowestTerm everywhere within the cull
 // margin (grown by the patch's largest warm-start offset) of the patch's box, bounded with the
 // largest omega a vertex of the patch can give the collider (w_max: the patch's largest
-// calibration weight) and the model's lowest threshold. Returns the new count.
+// calibration weight) and the set's iso (no pair's threshold is lower). Returns the new count.
 int keepReachable(const Frame& fr, const Bounds& box, float offset_max, float w_max,
                   std::uint16_t (&list)[kMaxListed], int n) {
   const DeformState& st = *fr.st;
@@ -571,7 +571,8 @@ int keepReachable(const Frame& fr, const Bounds& box, float offset_max, float w_
             : (col.body == fr.self ? std::max(prim.max_skin_weight, w_max) : prim.max_skin_weight);
     const float d = skeletonDistance(prim.shape, centre);
     const float r_near = std::max(d - radius * col.inv_unit, 0.0f) * prim.inv_r_out;
-    const float x_near = omega * prim.weight * densityValue(prim.density, r_near) - st.iso_floor;
+    const float x_near =
+        omega * prim.weight * densityValue(prim.density, r_near) - fr.model->primitives.iso;
     if (x_near > lowestTerm(fr, col)) list[kept++] = list[i];
   }
   return kept;
@@ -1558,8 +1559,6 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
   st.any_inelastic =
       std::any_of(model.primitives.items.begin(), model.primitives.items.end(),
                   [](const Primitive& p) { return p.elasticity != Elasticity::kElastic; });
-  st.iso_floor = model.primitives.iso;
-  for (const VertexPair& p : model.calibration.pairs) st.iso_floor = std::min(st.iso_floor, p.iso);
   st.fixed_kind.resize(nv);
   for (std::size_t v = 0; v < nv; ++v) {
     st.fixed_kind[v] =

@@ -229,7 +229,6 @@ struct DeformState {
   std::vector<std::uint32_t> contact_list;  // (nvert) the vertices in contact, each
                                             // chunk's from its first vertex on
   bool any_inelastic = false;  // a primitive is plastic or viscoelastic (free_offset is kept)
-  float iso_floor = 0.5f;      // the lowest threshold: the set's iso or a pair's (pass A's bounds)
   std::vector<std::uint8_t> fixed_kind;    // rigid limb or free vertex (nvert)
   std::vector<std::uint8_t> resting;       // pass B: fixed, nothing near (nvert)
   std::vector<std::uint32_t> solve_list;   // (nvert) the others, each chunk's from
