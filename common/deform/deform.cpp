@@ -71,7 +71,6 @@ struct Candidate {
   float rho = 1.0f;    // (1 - lambda) / lambda: weight of the penetration term (lambda > 0)
   bool hard = false;   // lambda = 0 (rigid partner, soft vertex): a constraint, see below
   float bulge = 0.0f;  // propagation amplitude (field units), 0 when off
-  float k_eff = kDefaultStiffness;
   int collider = 0;
 };
 
@@ -533,7 +532,6 @@ void loadCandidates(const Frame& fr, int v, bool with_bulge, VertexProblem& vp) 
     cd.rho = cd.hard ? 0.0f : cd.share / (1.0f - cd.share);
     cd.omega = cs.omega;
     cd.iso = cs.iso;
-    cd.k_eff = effectiveStiffness(k_self, k_other);
     const float pmax = std::bit_cast<float>(col.pmax_bits);
     const bool bulges = with_bulge && (col.body != fr.self || fr.opt->self_propagation);
     cd.bulge = bulges ? 2.0f * cd.share * vp.w * amplitude * pmax : 0.0f;

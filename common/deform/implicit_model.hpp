@@ -64,11 +64,13 @@ inline float skinWeightAt(const SkinWeightGrid& g, const glm::vec3& p) {
                                  glm::vec3(last));
   const glm::ivec3 i = glm::min(glm::ivec3(u), glm::ivec3(g.n - 2));
   const glm::vec3 t = u - glm::vec3(i);
+  // The cell's eight samples from its lowest corner (x fastest, then y, then z).
   const auto n = static_cast<std::size_t>(g.n);
-  const auto at = [&](int dx, int dy, int dz) {
-    return g
-        .values[(static_cast<std::size_t>(i.z + dz) * n + static_cast<std::size_t>(i.y + dy)) * n +
-                static_cast<std::size_t>(i.x + dx)];
+  const float* const c = g.values.data() +
+                         (static_cast<std::size_t>(i.z) * n + static_cast<std::size_t>(i.y)) * n +
+                         static_cast<std::size_t>(i.x);
+  const auto at = [c, n](std::size_t dx, std::size_t dy, std::size_t dz) {
+    return c[(dz * n + dy) * n + dx];
   };
   const auto lerp = [](float a, float b, float s) { return a + s * (b - a); };
   const float y0 =
