@@ -72,6 +72,8 @@ struct Candidate {
   bool hard = false;   // lambda = 0 (rigid partner, soft vertex): a constraint, see below
   float bulge = 0.0f;  // propagation amplitude (field units), 0 when off
   int collider = 0;
+  int lane = -1;  // the vertex's own packed lane holding the same primitive, or -1 (the
+                  // joint's opposite limb is both: its own field in DIFF and a collider)
 };
 
 // Everything the per-vertex function needs, gathered once per vertex.
@@ -135,7 +137,8 @@ inline float ownSum(VertexProblem& vp, glm::vec3& grad, Field&& field) {
 // the plane's gradient, no own_side). Not the larger of the two limbs: where the opposite limb's
 // field is the larger it has come into the vertex's side, and its gradient points out of that limb,
 // not out of the vertex's skin (a torso vertex under a lowered arm would follow the arm).
-inline float ownExcess(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
+// `lanes` gets the own fields where they are packed (vp.lanes), and is left alone otherwise.
+inline float ownExcess(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad, FieldValues& lanes) {
   if (vp.cls == VertexClass::kFree) {
     grad = -vp.slope * vp.n0;
     vp.smooth_gradient = grad;
@@ -143,7 +146,6 @@ inline float ownExcess(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
   }
   // The own fields in one pass where they are packed (the same values), else one by one.
   if (vp.lanes != nullptr) {
-    FieldValues lanes;
     fieldLanes(*vp.lanes, p, lanes);
     return ownSum(vp, grad, [&lanes](int k, glm::vec3& g) {
       g = glm::vec3(lanes.gx[k], lanes.gy[k], lanes.gz[k]);
@@ -161,13 +163,23 @@ inline float ownExcess(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
 // lambda (w_v D_v - T) = (1 - lambda) x: lambda = 1/2 is Gascuel's common surface. Rigid
 // partners (lambda = 0) are not in g: they are hard constraints x_i <= 0 applied after.
 inline float evaluateTerms(VertexProblem& vp, const glm::vec3& p, glm::vec3& grad) {
-  float g = ownExcess(vp, p, grad);
+  FieldValues lanes;
+  float g = ownExcess(vp, p, grad, lanes);
   for (int i = 0; i < vp.ncand; ++i) {
     const Candidate& c = vp.cand[i];
     // A hard partner without a bulge adds nothing to g (it is enforced after the solve).
     if ((c.hard && !(c.bulge > 0.0f)) || !inBounds(*c.prim, p)) continue;
+    // A partner that is one of the vertex's own packed fields is already evaluated (the
+    // same bits as primitiveField, see field_lanes.hpp).
     glm::vec3 gf;
-    const float f = primitiveField(*c.prim, p, &gf);
+    float f;
+    if (c.lane >= 0) {
+      const auto k = static_cast<std::size_t>(c.lane);
+      f = lanes.f[k];
+      gf = glm::vec3(lanes.gx[k], lanes.gy[k], lanes.gz[k]);
+    } else {
+      f = primitiveField(*c.prim, p, &gf);
+    }
     const float x = c.omega * f - c.iso;
     if (x > 0.0f) {
       if (!c.hard) {
@@ -525,6 +537,10 @@ void loadCandidates(const Frame& fr, int v, bool with_bulge, VertexProblem& vp) 
     Candidate& cd = vp.cand[kept];
     cd.prim = col.posed;
     cd.collider = c;
+    cd.lane = -1;
+    for (int k = 0; k < 4 && vp.lanes != nullptr; ++k) {
+      if (vp.own[k] == cd.prim) cd.lane = k;
+    }
     const float k_other = col.posed->stiffness;
     cd.share = shareOf(k_self, k_other);
     // A free vertex has no field for the partner to meet: it takes the whole contact.
@@ -1777,6 +1793,7 @@ float vertexFunction(const ImplicitModel& model, std::span<const BodyView> bodie
   VertexProblem vp;
   gatherProblem(fr, v, true, vp);
   vp.lanes = nullptr;  // the own fields from `bodies` themselves (the same values)
+  for (int i = 0; i < vp.ncand; ++i) vp.cand[i].lane = -1;
   glm::vec3 grad;
   const float g = evaluate(vp, p, grad);
   if (gradient != nullptr) *gradient = grad;
