@@ -10,7 +10,9 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
+#include <type_traits>
 
 #include "common/deform/vertex_field.hpp"
 
@@ -564,6 +566,27 @@ void gatherProblem(const Frame& fr, int v, bool with_bulge, VertexProblem& vp) {
   loadCandidates(fr, v, with_bulge, vp);
 }
 
+// A relaxed vertex's problem as pass B gathered it, kept for the relaxation passes (which
+// would gather the same again, twice): slot `slot` of DeformState::relax_problems, its
+// candidates up to `ncand` (the side results after them are rewritten by every evaluation).
+static_assert(std::is_trivially_copyable_v<VertexProblem>);
+constexpr std::size_t kKeptProblemBytes = sizeof(VertexProblem);
+void keepProblem(DeformState& st, std::size_t slot, const VertexProblem& vp, int ncand) {
+  std::byte* const out = st.relax_problems.data() + slot * kKeptProblemBytes;
+  const std::size_t bytes =
+      offsetof(VertexProblem, cand) + static_cast<std::size_t>(ncand) * sizeof(Candidate);
+  std::memcpy(out, &vp, bytes);
+  std::memcpy(out + offsetof(VertexProblem, ncand), &ncand, sizeof ncand);
+}
+void keptProblem(const DeformState& st, std::size_t slot, VertexProblem& vp) {
+  const std::byte* const in = st.relax_problems.data() + slot * kKeptProblemBytes;
+  int ncand = 0;
+  std::memcpy(&ncand, in + offsetof(VertexProblem, ncand), sizeof ncand);
+  std::memcpy(&vp, in,
+              offsetof(VertexProblem, cand) + static_cast<std::size_t>(ncand) * sizeof(Candidate));
+  vp.last_point = glm::vec3(NAN);
+}
+
 // Drops from a patch's collider list the colliders that cannot matter to any of its
 // vertices: where x = omega F_i - iso stays at or below lowestTerm everywhere within the cull
 // margin (grown by the patch's largest warm-start offset) of the patch's box, bounded with the
@@ -1030,6 +1053,7 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
     const bool listed = (cand_count[vi] & 0x7F) != 0;
     if (!fixed && solveLoneLimb(fr, v, cnt)) continue;
     if (listed || !fixed) gatherProblem(fr, v, true, vp);
+    const int gathered_ncand = vp.ncand;  // (the memory below drops the candidates)
     if (fixed && (!listed || vp.ncand == 0)) {
       offset[vi] = 0.0f;
       free_offset[vi] = 0.0f;
@@ -1164,6 +1188,10 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
       st.flags[vi] |= kVertexRelaxed;
       st.relax_list[static_cast<std::size_t>(first + cnt.relaxed_vertices)] =
           static_cast<std::uint32_t>(v);
+      keepProblem(st,
+                  st.joint_prefix[static_cast<std::size_t>(first)] +
+                      static_cast<std::size_t>(cnt.relaxed_vertices),
+                  vp, gathered_ncand);
       ++cnt.relaxed_vertices;
       st.field_gradient[vi] = gradientNear(vp, st.positions[vi], opt.root.final_step);
     }
@@ -1186,7 +1214,8 @@ void passRelax(Frame& fr, int first, int count, DeformCounters& cnt) {
     const std::uint32_t r0 = cal.ring_offsets[vi];
     const std::uint32_t r1 = cal.ring_offsets[vi + 1];
     if (r0 == r1) continue;
-    gatherProblem(fr, static_cast<int>(v), true, vp);
+    keptProblem(st, st.joint_prefix[static_cast<std::size_t>(first)] + static_cast<std::size_t>(k),
+                vp);
     // Outward field normal at the current position.
     const glm::vec3 p = st.positions[vi];
     glm::vec3 grad = st.field_gradient[vi];  // from the solve that put the vertex at p
@@ -1581,6 +1610,12 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
             : 0;
   }
   st.solve_list.assign(nv, 0);
+  st.joint_prefix.assign(nv + 1, 0);
+  for (std::size_t v = 0; v < nv; ++v) {
+    st.joint_prefix[v + 1] =
+        st.joint_prefix[v] + (model.calibration.vertex_class[v] == VertexClass::kJoint ? 1 : 0);
+  }
+  st.relax_problems.assign(st.joint_prefix[nv] * kKeptProblemBytes, std::byte{0});
   st.cand_count.assign(nv, 0);
   st.dirty.assign(nv, 0);
   st.candidates.assign(nv * kMaxCandidates, DeformState::CandidateSlot{});

@@ -35,6 +35,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -226,6 +227,11 @@ struct DeformState {
   std::vector<glm::vec3> relaxed;           // relaxation pass output (nvert)
   std::vector<std::uint32_t> relax_list;    // (nvert) the vertices to relax, each
                                             // chunk's from its first vertex on
+  std::vector<std::uint32_t> joint_prefix;  // (nvert + 1) joint vertices before each
+  std::vector<std::byte> relax_problems;    // room for a problem per joint vertex: the
+                                            // relaxed vertices' as pass B gathered them,
+                                            // a chunk's from joint_prefix[its first
+                                            // vertex] on in relax_list order (internal)
   std::vector<std::uint32_t> contact_list;  // (nvert) the vertices in contact, each
                                             // chunk's from its first vertex on
   bool any_inelastic = false;  // a primitive is plastic or viscoelastic (free_offset is kept)
