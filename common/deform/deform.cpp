@@ -768,8 +768,41 @@ inline bool ownSideHolds(const VertexProblem& vp, float from, const glm::vec3& p
   return at_p >= opt.joint_own_side * std::min(from, vp.iso);
 }
 
+// The skeleton distance at which hard partner c's term is zero (omega F = iso), where its
+// profile inverts in closed form (see densityInverseSquared).
+bool hardSurfaceDistance(const Candidate& c, float& rho) {
+  const PosedPrimitive& prim = *c.prim;
+  const float scale = c.omega * prim.weight;
+  double u = 0.0;
+  if (!(scale > 0.0f) || !densityInverseSquared(prim.density, c.iso / scale, u)) return false;
+  rho = static_cast<float>(std::sqrt(u)) / prim.inv_r_out;
+  return rho > 0.0f && std::isfinite(rho);
+}
+
+// A hard line search's result in closed form: going down from s_start, where the line
+// p + s dir is inside the partner (skeleton distance below rho), it leaves the partner at the
+// lower end of the interval lineInsideInterval gives; found when that lies within s_max, as
+// findRoot's search is bounded. Returns false where that interval does not hold s_start
+// (closed form and field disagree beyond rounding): the caller searches instead.
+bool lineExit(const PosedPrimitive& prim, float rho, const glm::vec3& p, const glm::vec3& dir,
+              float s_start, float s_max, RootResult& out) {
+  constexpr float kSlack = 1e-5f;  // metres
+  float t_in = 0.0f;
+  float t_out = 0.0f;
+  if (!lineInsideInterval(prim.shape, rho, p, dir, t_in, t_out) ||
+      !(t_in <= s_start + kSlack && t_out >= s_start - kSlack)) {
+    return false;
+  }
+  out = RootResult{};
+  out.s = std::min(t_in, s_start);
+  out.found = out.s >= -s_max;
+  return true;
+}
+
 // Solves the soft equation along dir from s_start (first evaluation g, grad given), then
-// enforces the hard constraints (rigid partners: the vertex ends on their surface).
+// enforces the hard constraints (rigid partners: the vertex ends on their surface). A hard
+// partner's surface along a line is found in closed form where its shape and profile allow
+// (hardSurfaceDistance, lineExit), else by a line search.
 RootResult solveVertex(VertexProblem& vp, glm::vec3& dir, float s_start, float g,
                        const glm::vec3& grad, float reach, const RootOptions& ropt,
                        DeformCounters& cnt, bool& iterated) {
@@ -809,10 +842,19 @@ RootResult solveVertex(VertexProblem& vp, glm::vec3& dir, float s_start, float g
     const glm::vec3 p1 = p0 + res.s * dir;
     glm::vec3 inward;
     const float g1 = c.iso - c.omega * primitiveField(*c.prim, p1, &inward);
-    const RootResult rh =
-        findRoot(eval_hard, res.s, g1, -c.omega * glm::dot(inward, dir), reach, ropt);
-    cnt.evaluations += 1 + rh.iterations;
-    cnt.iterations += 1 + rh.iterations;
+    // The partner's surface along the line in closed form where its shape and profile allow
+    // (the result of the search below up to its tolerance), else by that search.
+    float rho = 0.0f;
+    const bool closed = hardSurfaceDistance(c, rho);
+    RootResult rh;
+    if (closed && lineExit(*c.prim, rho, p0, dir, res.s, reach, rh)) {
+      cnt.evaluations += 2;
+      cnt.iterations += 1;
+    } else {
+      rh = findRoot(eval_hard, res.s, g1, -c.omega * glm::dot(inward, dir), reach, ropt);
+      cnt.evaluations += 1 + rh.iterations;
+      cnt.iterations += 1 + rh.iterations;
+    }
     // The shortest way out of the partner is along its gradient: about x / |grad(omega F)|.
     const float len = glm::length(inward);
     const float exit = len > 0.0f ? x / (c.omega * len) : INFINITY;
@@ -835,10 +877,16 @@ RootResult solveVertex(VertexProblem& vp, glm::vec3& dir, float s_start, float g
       };
       // Within the partner's support: however deep the vertex, its way out is that short.
       // It starts where the line search did (g1 at p1).
-      const RootResult ro = findRoot(eval_out, 0.0f, g1, -c.omega * glm::dot(inward, out),
-                                     std::max(reach, c.prim->reach), ropt);
-      cnt.evaluations += ro.iterations;
-      cnt.iterations += ro.iterations;
+      const float out_max = std::max(reach, c.prim->reach);
+      RootResult ro;
+      if (closed && lineExit(*c.prim, rho, p1, out, 0.0f, out_max, ro)) {
+        cnt.evaluations += 1;
+        cnt.iterations += 1;
+      } else {
+        ro = findRoot(eval_out, 0.0f, g1, -c.omega * glm::dot(inward, out), out_max, ropt);
+        cnt.evaluations += ro.iterations;
+        cnt.iterations += ro.iterations;
+      }
       if (ro.found && (!rh.found || std::abs(ro.s) < std::abs(rh.s - res.s))) {
         const glm::vec3 moved = p1 + ro.s * out - p0;
         const float dist = glm::length(moved);

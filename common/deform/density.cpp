@@ -1,6 +1,7 @@
 // Wyvill et al. 1986 soft-object polynomial and a piecewise cubic Hermite profile.
 #include "common/deform/density.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace vistel {
@@ -37,6 +38,19 @@ bool validDensity(const Density& d) {
              d.slope >= 0.1f && d.slope <= 3.0f;
   }
   return false;
+}
+
+bool densityInverseSquared(const Density& d, float f, double& u) {
+  if (d.kind != DensityKind::kWyvill || !(f > 0.0f && f < 1.0f)) return false;
+  const double target = 9.0 * static_cast<double>(f);
+  double v = std::min(1.0, std::sqrt(target / 5.0));
+  for (int i = 0; i < 8; ++i) {
+    const double step = (v * v * (4.0 * v + 5.0) - target) / (v * (12.0 * v + 10.0));
+    v -= step;
+    if (!(std::abs(step) > 1e-13)) break;
+  }
+  u = 1.0 - v;
+  return u > 0.0 && u < 1.0;
 }
 
 float piecewiseDensity(const Density& d, float r, float* derivative) {

@@ -63,4 +63,11 @@ inline float densityValueSquared(const Density& d, float u, float* derivative_u 
   return 1.0f + u * (-22.0f / 9.0f + u * (17.0f / 9.0f - 4.0f / 9.0f * u));
 }
 
+// The u in (0, 1) where the profile of densityValueSquared takes the value f in (0, 1): for
+// Wyvill's, f(u) = (1 - u)^2 (1 - 4u/9), so v = 1 - u solves 4 v^3 + 5 v^2 = 9 f, increasing
+// and convex in v; Newton's method from v = sqrt(9 f / 5), which lies above the root,
+// converges to it monotonically. Returns false for the piecewise profile (not handled) and for
+// f outside (0, 1).
+bool densityInverseSquared(const Density& d, float f, double& u);
+
 }  // namespace vistel

@@ -45,7 +45,119 @@ float segmentPolygonDistance(const glm::vec3& p0, const glm::vec3& p1, const Sha
   return best;
 }
 
+// An interval of line parameters, grown by union (lo > hi: empty).
+struct LineInterval {
+  double lo = INFINITY;
+  double hi = -INFINITY;
+  void add(double a, double b) {
+    if (!(a <= b)) return;
+    lo = std::min(lo, a);
+    hi = std::max(hi, b);
+  }
+};
+
+// The line p + t d inside the ball about c of radius r: |q + t d|^2 <= r^2, q = p - c.
+void lineBall(const glm::dvec3& p, const glm::dvec3& d, const glm::dvec3& c, double r,
+              LineInterval& out) {
+  const glm::dvec3 q = p - c;
+  const double a = glm::dot(d, d);
+  const double b = glm::dot(q, d);
+  const double disc = b * b - a * (glm::dot(q, q) - r * r);
+  if (!(disc >= 0.0) || !(a > 0.0)) return;
+  const double root = std::sqrt(disc);
+  out.add((-b - root) / a, (-b + root) / a);
+}
+
+// The line inside the truncated cone tangent to the balls (a, ra) and (b, rb), the part of
+// their hull between the two circles where it touches them. A ball of radius R(z) = ra + k z
+// about the axis point at z touches the envelope in the plane x = z - R(z) k, on the circle
+// of radius R(z) sqrt(1 - k^2); so between x_lo = -k ra and x_hi = L - k rb the cone's radius
+// is (ra + k x) / sqrt(1 - k^2), and a point at axial x, radial distance y is inside when
+// (1 - k^2) y^2 <= (ra + k x)^2 (ra + k x > 0 there). None when |k| >= 1 (one ball holds
+// the other).
+void lineFrustum(const glm::dvec3& p, const glm::dvec3& d, const glm::dvec3& a, const glm::dvec3& e,
+                 double length, double ra, double rb, LineInterval& out) {
+  const double k = (rb - ra) / length;
+  const double m = 1.0 - k * k;
+  if (!(m > 1e-9)) return;
+  const glm::dvec3 q = p - a;
+  const double x0 = glm::dot(q, e);
+  const double dx = glm::dot(d, e);
+  // The slab between the two circles' planes.
+  const double x_lo = -k * ra;
+  const double x_hi = length - k * rb;
+  double t1 = -INFINITY;
+  double t2 = INFINITY;
+  if (std::abs(dx) > 1e-12) {
+    t1 = (x_lo - x0) / dx;
+    t2 = (x_hi - x0) / dx;
+    if (t1 > t2) std::swap(t1, t2);
+  } else if (x0 < x_lo || x0 > x_hi) {
+    return;
+  }
+  // (1 - k^2)(|q + t d|^2 - x(t)^2) - (ra + k x(t))^2 = A t^2 + 2 B t + C <= 0.
+  const double r0 = ra + k * x0;
+  const double qa = m * (glm::dot(d, d) - dx * dx) - k * k * dx * dx;
+  const double qb = m * (glm::dot(q, d) - x0 * dx) - k * r0 * dx;
+  const double qc = m * (glm::dot(q, q) - x0 * x0) - r0 * r0;
+  if (std::abs(qa) < 1e-12) {  // (nearly) linear: 2 B t + C <= 0
+    if (std::abs(qb) < 1e-15) {
+      if (qc <= 0.0) out.add(t1, t2);
+      return;
+    }
+    const double t = -qc / (2.0 * qb);
+    if (qb > 0.0) {
+      out.add(t1, std::min(t2, t));
+    } else {
+      out.add(std::max(t1, t), t2);
+    }
+    return;
+  }
+  const double disc = qb * qb - qa * qc;
+  if (!(disc >= 0.0)) {
+    if (qa < 0.0) out.add(t1, t2);  // below zero everywhere
+    return;
+  }
+  const double root = std::sqrt(disc);
+  const double s1 = std::min((-qb - root) / qa, (-qb + root) / qa);
+  const double s2 = std::max((-qb - root) / qa, (-qb + root) / qa);
+  if (qa > 0.0) {
+    out.add(std::max(t1, s1), std::min(t2, s2));
+  } else {  // outside the roots (the slab holds one nappe only)
+    out.add(t1, std::min(t2, s1));
+    out.add(std::max(t1, s2), t2);
+  }
+}
+
 }  // namespace
+
+bool lineInsideInterval(const Shape& s, float rho, const glm::vec3& p, const glm::vec3& dir,
+                        float& t_in, float& t_out) {
+  if (s.kind == ShapeKind::kOffsetPolygon || !(rho > 0.0f)) return false;
+  const glm::dvec3 pd(p);
+  const glm::dvec3 dd(dir);
+  const glm::dvec3 a(s.a);
+  const double r = rho;
+  LineInterval in;
+  if (s.kind == ShapeKind::kSphere) {
+    lineBall(pd, dd, a, r, in);
+  } else {
+    const bool cone = s.kind == ShapeKind::kConeSphere;
+    const double ra = cone ? r * s.radius_a : r;
+    const double rb = cone ? r * s.radius_b : r;
+    lineBall(pd, dd, a, ra, in);
+    if (s.length > 0.0f) {
+      const glm::dvec3 e(s.axis);
+      const double length = s.length;
+      lineBall(pd, dd, glm::dvec3(s.b), rb, in);
+      lineFrustum(pd, dd, a, e, length, ra, rb, in);
+    }
+  }
+  if (!(in.lo <= in.hi)) return false;
+  t_in = static_cast<float>(in.lo);
+  t_out = static_cast<float>(in.hi);
+  return true;
+}
 
 glm::vec3 polygonOffset(const Shape& s, const glm::vec3& p) {
   const glm::vec3 r = p - s.a;

@@ -73,6 +73,17 @@ Bounds shapeBounds(const Shape& shape, float reach);
 // `reach` (reach itself, or reach * max radius for the cone-sphere).
 float metricReach(const Shape& shape, float reach);
 
+// The parameters t of the line p + t dir (dir not zero; unit or not) whose points have a
+// skeleton distance of at most rho > 0: [t_in, t_out]. That set is convex: a ball for the
+// sphere, and for the sphylinder and the cone-sphere the convex hull of the balls about the
+// segment's ends (radius rho, or rho times the end's radius for the cone-sphere's ratio), so
+// the line meets it in one interval, computed in closed form: the end balls and the
+// truncated cone tangent to both. Returns false where the line misses it, and for the polygon
+// (not handled). Where the line grazes it the interval's ends carry the rounding of a
+// quadratic's root.
+bool lineInsideInterval(const Shape& shape, float rho, const glm::vec3& p, const glm::vec3& dir,
+                        float& t_in, float& t_out);
+
 // Distance between the two skeletons (cone-spheres as their axis segments), metres.
 // Used by Step 1's analytic bounding-volume test. Exact for every pair of kinds.
 float skeletonGap(const Shape& s1, const Shape& s2);

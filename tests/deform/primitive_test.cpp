@@ -75,6 +75,25 @@ TEST(Density, PiecewiseStiffnessChangesSlopeAtKnee) {
   EXPECT_FALSE(validDensity(Density{DensityKind::kPiecewise, 0.95f, 1.0f}));
 }
 
+// The inverse of Wyvill's profile in u against the profile itself, from the edge of the
+// support to its centre; the piecewise profile and values outside (0, 1) are refused.
+TEST(Density, WyvillInverseRecoversU) {
+  const Density d;
+  for (int i = 1; i < 1000; ++i) {
+    const float f = static_cast<float>(i) / 1000.0f;
+    double u = -1.0;
+    ASSERT_TRUE(densityInverseSquared(d, f, u)) << f;
+    ASSERT_GT(u, 0.0);
+    ASSERT_LT(u, 1.0);
+    ASSERT_NEAR(densityValueSquared(d, static_cast<float>(u)), f, 2e-6f) << f;
+  }
+  double u = 0.0;
+  EXPECT_FALSE(densityInverseSquared(d, 0.0f, u));
+  EXPECT_FALSE(densityInverseSquared(d, 1.0f, u));
+  EXPECT_FALSE(densityInverseSquared(d, NAN, u));
+  EXPECT_FALSE(densityInverseSquared(Density{DensityKind::kPiecewise, 0.5f, 1.5f}, 0.5f, u));
+}
+
 // Brute-force skeleton distance by dense sampling of the skeleton.
 float bruteDistance(const Shape& s, const glm::vec3& p) {
   float best = INFINITY;
@@ -393,6 +412,69 @@ TEST(Primitive, ConeSphereLevelSetsAreScaledHullsOfEndSpheres) {
   EXPECT_NEAR(skeletonDistance(s, 0.5f * (touch_a + touch_b)), 1.0f, 1e-4f);
   // Scaling: ratio 2 on the doubled hull.
   EXPECT_NEAR(skeletonDistance(s, glm::vec3(-0.1f, 0.0f, 0.0f)), 2.0f, 1e-5f);
+}
+
+// The interval of a line inside a level set of the skeleton distance (the hard contact's
+// closed form) against the distance sampled along the line: every sampled point inside lies
+// in the interval, every one well within it is inside, and its ends are on the level set. On
+// random lines near each shape, lines along a cone's axis and through the apex side of a
+// steep cone, and a segment of length 0; the polygon is not handled.
+TEST(Primitive, LineInsideIntervalMatchesSampledDistance) {
+  std::vector<Shape> all;
+  for (const Shape& s : shapes()) {
+    if (s.kind != ShapeKind::kOffsetPolygon) all.push_back(s);
+  }
+  all.push_back(slabAndSteepCone()[1]);
+  Shape point_cone = all.back();
+  point_cone.b = point_cone.a;
+  prepareShape(point_cone);
+  all.push_back(point_cone);
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  constexpr float kStep = 2e-4f;
+  int hits = 0, misses = 0;
+  for (Shape s : all) {
+    prepareShape(s);
+    const float unit = s.kind == ShapeKind::kConeSphere ? std::max(s.radius_a, s.radius_b) : 1.0f;
+    for (int line = 0; line < 300; ++line) {
+      const float rho = (0.3f + 0.7f * std::abs(u(rng))) * 0.08f / unit;
+      glm::vec3 p = centre(s) + 0.12f * glm::vec3(u(rng), u(rng), u(rng));
+      glm::vec3 dir = glm::normalize(glm::vec3(u(rng), u(rng), u(rng)) + glm::vec3(1e-3f));
+      if (line == 0 && s.length > 0.0f) dir = s.axis;  // along the axis, from the middle
+      if (line == 1 && s.length > 0.0f) {
+        p = s.a - 0.05f * s.axis + 0.001f * glm::vec3(u(rng), u(rng), u(rng));
+        dir = glm::normalize(s.axis + 0.2f * glm::vec3(u(rng), u(rng), u(rng)));
+      }
+      float t_in = 0.0f, t_out = 0.0f;
+      const bool hit = lineInsideInterval(s, rho, p, dir, t_in, t_out);
+      hits += hit ? 1 : 0;
+      misses += hit ? 0 : 1;
+      if (hit) {
+        ASSERT_LE(t_in, t_out);
+        for (const float t : {t_in, t_out}) {
+          const float d = skeletonDistance(s, p + t * dir);
+          ASSERT_NEAR(d, rho, 2e-5f / unit + 1e-5f * rho)
+              << "kind " << static_cast<int>(s.kind) << " line " << line;
+        }
+      }
+      for (float t = -0.6f; t <= 0.6f; t += kStep) {
+        const float d = skeletonDistance(s, p + t * dir);
+        if (d <= rho) {
+          ASSERT_TRUE(hit) << "kind " << static_cast<int>(s.kind) << " line " << line << " t " << t;
+          ASSERT_GE(t, t_in - kStep) << "kind " << static_cast<int>(s.kind) << " line " << line;
+          ASSERT_LE(t, t_out + kStep) << "kind " << static_cast<int>(s.kind) << " line " << line;
+        } else if (hit && t > t_in + kStep && t < t_out - kStep) {
+          FAIL() << "outside within the interval: kind " << static_cast<int>(s.kind) << " line "
+                 << line << " t " << t << " distance " << d << " rho " << rho;
+        }
+      }
+    }
+  }
+  EXPECT_GT(hits, 300);
+  EXPECT_GT(misses, 50);
+  float t_in = 0.0f, t_out = 0.0f;
+  EXPECT_FALSE(lineInsideInterval(slabAndSteepCone()[0], 0.05f, glm::vec3(0.0f),
+                                  glm::vec3(1.0f, 0.0f, 0.0f), t_in, t_out));
 }
 
 TEST(Primitive, SkeletonGapMatchesBruteForce) {
