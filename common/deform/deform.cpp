@@ -98,7 +98,10 @@ struct VertexProblem {
   glm::vec3 smooth_gradient{0.0f};
   glm::vec3 last_point{NAN};  // where it was, and the gradient of g there
   glm::vec3 last_gradient{0.0f};
-  float own_side = 0.0f;  // w_v (F_p0 + F_p1 + F_bone) at the last evaluation (see ownExcess)
+  float own_side = 0.0f;      // w_v (F_p0 + F_p1 + F_bone) at the last evaluation (see ownExcess)
+  glm::vec3 hard_point{NAN};  // where deepestHard looked last, and what it found
+  int hard_best = -1;
+  float hard_x = 0.0f;
 };
 
 // ownExcess's sum for a limb or joint vertex, given field(k, grad) -> F of own[k] at p and
@@ -212,8 +215,9 @@ inline glm::vec3 gradientNear(const VertexProblem& vp, const glm::vec3& p, float
   return glm::dot(d, d) <= within * within ? vp.last_gradient : glm::vec3(NAN);
 }
 
-// Deepest hard-constraint violation at p: the rigid partner with the largest x, or -1.
-inline int deepestHard(const VertexProblem& vp, const glm::vec3& p, float& x_out) {
+// Deepest hard-constraint violation at p: the rigid partner with the largest x, or -1
+// (remembered in vp, see deepestPartner).
+inline int deepestHard(VertexProblem& vp, const glm::vec3& p, float& x_out) {
   int best = -1;
   x_out = -INFINITY;
   for (int i = 0; i < vp.ncand; ++i) {
@@ -225,6 +229,9 @@ inline int deepestHard(const VertexProblem& vp, const glm::vec3& p, float& x_out
       best = i;
     }
   }
+  vp.hard_point = p;
+  vp.hard_best = best;
+  vp.hard_x = x_out;
   return best;
 }
 
@@ -282,6 +289,7 @@ void gatherOwn(const Frame& fr, int v, VertexProblem& vp) {
   vp.ncand = 0;
   vp.overflow = false;
   vp.last_point = glm::vec3(NAN);
+  vp.hard_point = glm::vec3(NAN);
 }
 
 // Marks a collider list entry as coming from an always-pair (it applies only to the
@@ -585,6 +593,7 @@ void keptProblem(const DeformState& st, std::size_t slot, VertexProblem& vp) {
   std::memcpy(&vp, in,
               offsetof(VertexProblem, cand) + static_cast<std::size_t>(ncand) * sizeof(Candidate));
   vp.last_point = glm::vec3(NAN);
+  vp.hard_point = glm::vec3(NAN);
 }
 
 // Drops from a patch's collider list the colliders that cannot matter to any of its
@@ -734,6 +743,14 @@ inline void markReshaped(const Frame& fr, int v) {
 
 // Deepest partner term at p over all candidates (x and index, -1 when none).
 inline int deepestPartner(const VertexProblem& vp, const glm::vec3& p, float& x_out) {
+  // Where every candidate is hard (a free vertex's) and deepestHard last looked at p, its
+  // answer stands for the contact test: the same largest x among the candidates in their
+  // boxes (the others have -iso, below any contact).
+  if (p == vp.hard_point &&
+      std::all_of(vp.cand, vp.cand + vp.ncand, [](const Candidate& c) { return c.hard; })) {
+    x_out = vp.hard_x;
+    return vp.hard_best;
+  }
   int best = -1;
   x_out = -INFINITY;
   for (int i = 0; i < vp.ncand; ++i) {
