@@ -979,22 +979,43 @@ inline float writeSolved(const Frame& fr, int v, const glm::vec3& p0, const glm:
 }
 
 // Pass B's short way for the commonest solved vertex: a limb vertex of one primitive (no
-// bone) with no collider and no elastic memory, projected along its normal, whose normal
-// finds the root. Its equation is w_v F_p0 - T alone, so it skips gathering a problem.
-// Returns false, having changed nothing, where the full way is needed (the normal
-// disagrees with the field's gradient, or finds no root); otherwise the result is the full
-// way's, bit for bit.
-bool solveLoneLimb(const Frame& fr, int v, DeformCounters& cnt) {
+// bone) with no collider and no elastic memory, projected along its normal (see
+// solveLoneLimb).
+bool loneLimb(const Frame& fr, std::size_t vi) {
+  const DeformState& st = *fr.st;
+  const Calibration& cal = fr.model->calibration;
+  const auto& pr = cal.prims[vi];
+  return cal.vertex_class[vi] == VertexClass::kLimb && pr[3] < 0 && pr[0] >= 0 &&
+         st.cand_count[vi] == 0 && st.memory[vi] == 0.0f &&
+         fr.opt->projection == ProjectionMode::kNormal && (st.flags[vi] & kVertexGradient) == 0;
+}
+
+// A lone limb vertex's equation w_v F_p0 - T and its gradient at its warm start: the first
+// evaluation of its solve.
+struct LoneStart {
+  float g;
+  glm::vec3 grad;
+};
+LoneStart loneStart(const Frame& fr, std::size_t vi) {
+  const Calibration& cal = fr.model->calibration;
+  const PosedPrimitive& prim = fr.posed->items[static_cast<std::size_t>(cal.prims[vi][0])];
+  const float w = cal.w[vi];
+  glm::vec3 g0;
+  const float d = primitiveField(
+      prim, fr.in->rigid_positions[vi] + fr.st->offset[vi] * fr.in->rigid_normals[vi], &g0);
+  return {w * d - fr.model->primitives.iso, w * g0};
+}
+
+// Solves a lone limb vertex (loneLimb) from its first evaluation `start` (loneStart): its
+// equation is w_v F_p0 - T alone, so it skips gathering a problem. Returns false, having
+// changed nothing, where the full way is needed (the normal disagrees with the field's
+// gradient, or finds no root); otherwise the result is the full way's, bit for bit.
+bool solveLoneLimb(const Frame& fr, int v, const LoneStart& start, DeformCounters& cnt) {
   const DeformState& st = *fr.st;
   const Calibration& cal = fr.model->calibration;
   const DeformOptions& opt = *fr.opt;
   const auto vi = static_cast<std::size_t>(v);
   const auto& pr = cal.prims[vi];
-  if (cal.vertex_class[vi] != VertexClass::kLimb || pr[3] >= 0 || pr[0] < 0 ||
-      st.cand_count[vi] != 0 || st.memory[vi] != 0.0f ||
-      opt.projection != ProjectionMode::kNormal || (st.flags[vi] & kVertexGradient) != 0) {
-    return false;
-  }
   const PosedPrimitive& prim = fr.posed->items[static_cast<std::size_t>(pr[0])];
   const float w = cal.w[vi];
   const float iso = fr.model->primitives.iso;
@@ -1007,8 +1028,8 @@ bool solveLoneLimb(const Frame& fr, int v, DeformCounters& cnt) {
     return w * d - iso;
   };
   const float s_start = st.offset[vi];
-  glm::vec3 grad;
-  const float g = eval(s_start, grad);
+  const glm::vec3 grad = start.grad;
+  const float g = start.g;
   const bool at_root = std::abs(g) < opt.root.tolerance;
   const float gn = at_root ? 0.0f : glm::length(grad);
   if (!at_root && gn > 0.0f && -glm::dot(dir, grad) / gn < opt.gradient_switch_cos) return false;
@@ -1111,12 +1132,38 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
   }
   list(last);
   cnt.rigid_vertices += (last - first) - nwork;
+  // The lone limb vertices first, a batch at a time: their first evaluations in a loop of
+  // their own (each independent of the others: the processor overlaps them), then the rest of
+  // each one's solve. The others, and any the short way leaves, stay listed for the loop below
+  // (no lone one touches a collider or is relaxed, so the contact and relaxation lists keep
+  // vertex order).
+  constexpr int kLoneBatch = 32;
+  std::uint32_t lone[kLoneBatch];
+  LoneStart starts[kLoneBatch];
+  int nlone = 0;
+  int nfull = 0;
+  const auto solve_lone = [&]() {
+    for (int i = 0; i < nlone; ++i) starts[i] = loneStart(fr, lone[i]);
+    for (int i = 0; i < nlone; ++i) {
+      if (!solveLoneLimb(fr, static_cast<int>(lone[i]), starts[i], cnt)) work[nfull++] = lone[i];
+    }
+    nlone = 0;
+  };
   for (int k = 0; k < nwork; ++k) {
+    const std::uint32_t v = work[k];
+    if (is_fixed(v) || !loneLimb(fr, v)) {
+      work[nfull++] = v;
+      continue;
+    }
+    lone[nlone++] = v;
+    if (nlone == kLoneBatch) solve_lone();
+  }
+  solve_lone();
+  for (int k = 0; k < nfull; ++k) {
     const int v = static_cast<int>(work[k]);
     const auto vi = static_cast<std::size_t>(v);
     const bool fixed = is_fixed(vi);
     const bool listed = (cand_count[vi] & 0x7F) != 0;
-    if (!fixed && solveLoneLimb(fr, v, cnt)) continue;
     if (listed || !fixed) gatherProblem(fr, v, true, vp);
     const int gathered_ncand = vp.ncand;  // (the memory below drops the candidates)
     if (fixed && (!listed || vp.ncand == 0)) {
