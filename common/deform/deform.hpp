@@ -9,7 +9,10 @@
 //     non-blending parts of the same body); Gascuel 1993 "An implicit formulation for
 //     precise contact modeling between flexible solids" for the penetration and
 //     propagation zones, with relative deformability and elastic memory (plastic,
-//     viscoelastic). A joint vertex whose root lies beyond its own side (where DIFF is the
+//     viscoelastic). A vertex inside a rigid partner (a hard constraint) retreats onto its
+//     surface; where the partner is a sphere, sphylinder or cone-sphere with Wyvill's profile
+//     its inside is convex and the point where a line leaves it comes in closed form, else
+//     from a line search. A joint vertex whose root lies beyond its own side (where DIFF is the
 //     opposite limb's field alone; see DeformOptions::joint_own_side) stays at P: a
 //     deliberate departure from DESIGN.md, whose equation degenerates there. Then a
 //     tangential relaxation of the moved joint vertices towards their rest barycentric
