@@ -990,20 +990,28 @@ bool loneLimb(const Frame& fr, std::size_t vi) {
          fr.opt->projection == ProjectionMode::kNormal && (st.flags[vi] & kVertexGradient) == 0;
 }
 
-// A lone limb vertex's equation w_v F_p0 - T and its gradient at its warm start: the first
-// evaluation of its solve.
+// A lone limb vertex's equation w_v F_p0(p) - T, and its gradient.
+inline float loneEquation(const PosedPrimitive& prim, float w, float iso, const glm::vec3& p,
+                          glm::vec3& grad) {
+  glm::vec3 g0;
+  const float d = primitiveField(prim, p, &g0);
+  grad = w * g0;
+  return w * d - iso;
+}
+
+// The equation at a lone limb vertex's warm start: the first evaluation of its solve.
 struct LoneStart {
   float g;
   glm::vec3 grad;
 };
 LoneStart loneStart(const Frame& fr, std::size_t vi) {
   const Calibration& cal = fr.model->calibration;
-  const PosedPrimitive& prim = fr.posed->items[static_cast<std::size_t>(cal.prims[vi][0])];
-  const float w = cal.w[vi];
-  glm::vec3 g0;
-  const float d = primitiveField(
-      prim, fr.in->rigid_positions[vi] + fr.st->offset[vi] * fr.in->rigid_normals[vi], &g0);
-  return {w * d - fr.model->primitives.iso, w * g0};
+  LoneStart start;
+  start.g = loneEquation(fr.posed->items[static_cast<std::size_t>(cal.prims[vi][0])], cal.w[vi],
+                         fr.model->primitives.iso,
+                         fr.in->rigid_positions[vi] + fr.st->offset[vi] * fr.in->rigid_normals[vi],
+                         start.grad);
+  return start;
 }
 
 // Solves a lone limb vertex (loneLimb) from its first evaluation `start` (loneStart): its
@@ -1021,12 +1029,6 @@ bool solveLoneLimb(const Frame& fr, int v, const LoneStart& start, DeformCounter
   const float iso = fr.model->primitives.iso;
   const glm::vec3 p0 = fr.in->rigid_positions[vi];
   const glm::vec3 dir = fr.in->rigid_normals[vi];
-  const auto eval = [&](float s, glm::vec3& grad) {
-    glm::vec3 g0;
-    const float d = primitiveField(prim, p0 + s * dir, &g0);
-    grad = w * g0;
-    return w * d - iso;
-  };
   const float s_start = st.offset[vi];
   const glm::vec3 grad = start.grad;
   const float g = start.g;
@@ -1040,7 +1042,7 @@ bool solveLoneLimb(const Frame& fr, int v, const LoneStart& start, DeformCounter
   if (!res.found) {
     const auto eval_line = [&](float s, float* dg) {
       glm::vec3 gr;
-      const float val = eval(s, gr);
+      const float val = loneEquation(prim, w, iso, p0 + s * dir, gr);
       *dg = glm::dot(gr, dir);
       return val;
     };

@@ -120,11 +120,14 @@ struct DeformPhaseTimes {
 
 // Per-frame counters (reset by each deformSkin).
 struct DeformCounters {
-  std::int64_t evaluations = 0;       // per-vertex function evaluations, all passes
+  std::int64_t evaluations = 0;       // per-vertex function evaluations, all passes (a
+                                      // rigid partner's surface found in closed form counts
+                                      // as one)
   std::int64_t iterations = 0;        // Step 2 root-finding iterations, before relaxation:
                                       // the evaluations after the first, and a last Newton
                                       // step taken without evaluating (RootOptions::
-                                      // final_step)
+                                      // final_step); a closed-form retreat onto a rigid
+                                      // partner counts as one
   std::int64_t relax_iterations = 0;  // iterations of the relaxation's final projections
   int iterating_vertices = 0;         // vertices whose first evaluation was not a root
   int unsolved_vertices = 0;          // no root within reach: left at the rigid position
