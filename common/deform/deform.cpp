@@ -393,27 +393,69 @@ struct PatchPoints {
   float x[kPatchSize], y[kPatchSize], z[kPatchSize];
   float margin[kPatchSize];  // cull margin and warm-start offset (see findCandidates)
   float w[kPatchSize];       // calibration weight
+  int bone[kPatchSize];      // bone primitive (Calibration::prims[v][3]; -1 for none)
 };
 struct PatchOffsets {
   float x[kPatchSize], y[kPatchSize], z[kPatchSize];  // skeletonOffset
   float scale[kPatchSize];                            // its scale
   float len[kPatchSize];                              // |offset|
-  std::uint8_t near[kPatchSize];  // inside the collider's cull box and within its cull distance
+  float density_near[kPatchSize];  // the profile's largest value within the point's margin
+  std::uint8_t near[kPatchSize];   // passes the first tests (see patchOffsets)
+  int listed[kPatchSize];          // the points that do, in order
+  int nlisted;
 };
 
-// skeletonOffset (skeletonOffsets), its length and the cull tests for every point of a patch
-// against one collider, as loops the compiler vectorises (the square root needs
-// -fno-math-errno, see CMakeLists.txt).
-void patchOffsets(const DeformState::Collider& col, const PatchPoints& p, PatchOffsets& o) {
+// skeletonOffset (skeletonOffsets), its length and the first tests for every point of a patch
+// against one collider `l`, as loops the compiler vectorises (the square root needs
+// -fno-math-errno, see CMakeLists.txt): inside the collider's cull box and within its cull
+// distance; not the point's own bone (unless from an always-pair); and x = omega F - iso can
+// pass lowestTerm within the point's margin, bounded with the largest scale omega the point can
+// give the partner's field and the set's iso (no pair's threshold is lower: VertexPair::iso,
+// validated). The points that pass are listed in `o.listed` (most fail: no branch each).
+void patchOffsets(const Listed& l, float iso, const PatchPoints& p, PatchOffsets& o) {
+  const DeformState::Collider& col = *l.col;
+  const PosedPrimitive& prim = *col.posed;
   const int m = p.count;
-  skeletonOffsets(col.posed->shape, m, p.x, p.y, p.z, o.x, o.y, o.z, o.scale);
+  skeletonOffsets(prim.shape, m, p.x, p.y, p.z, o.x, o.y, o.z, o.scale);
   const Bounds& c = col.cull;
+  // Locals, so that the stores below cannot alias them.
+  const float cull_distance = col.cull_distance, inv_unit = col.inv_unit;
+  const float inv_r_out = prim.inv_r_out, weight = prim.weight, lowest = l.lowest;
+  const float max_w = prim.max_skin_weight;
+  const bool rigid = l.rigid, same = l.same, adjacent = l.adjacent;
+  // The own bone is never a collider of its vertices, except through an always-pair.
+  const int skip_bone = l.same && !l.always_entry ? static_cast<int>(col.prim) : -2;
   for (int i = 0; i < m; ++i) {
     o.len[i] = std::sqrt(o.x[i] * o.x[i] + o.y[i] * o.y[i] + o.z[i] * o.z[i]);
+    const float d = o.len[i] * o.scale[i];
+    const float r_near = std::max(d - p.margin[i] * inv_unit, 0.0f) * inv_r_out;
+    o.density_near[i] = r_near;
+  }
+  if (prim.density.kind == DensityKind::kWyvill) {
+    for (int i = 0; i < m; ++i) {  // densityValue without the branches
+      const float r = o.density_near[i];
+      const float r2 = r * r;
+      const float f = 1.0f + r2 * (-22.0f / 9.0f + r2 * (17.0f / 9.0f - 4.0f / 9.0f * r2));
+      o.density_near[i] = r <= 0.0f ? 1.0f : (r >= 1.0f ? 0.0f : f);
+    }
+  } else {
+    for (int i = 0; i < m; ++i) o.density_near[i] = densityValue(prim.density, o.density_near[i]);
+  }
+  for (int i = 0; i < m; ++i) {
     const bool in_box = (p.x[i] >= c.min.x) & (p.x[i] <= c.max.x) & (p.y[i] >= c.min.y) &
                         (p.y[i] <= c.max.y) & (p.z[i] >= c.min.z) & (p.z[i] <= c.max.z);
-    o.near[i] = in_box & !(o.len[i] * o.scale[i] > col.cull_distance);
+    const float omega_bound =
+        rigid ? 1.0f : (same ? (adjacent ? p.w[i] : std::max(p.w[i], max_w)) : max_w);
+    const bool reaches = omega_bound * weight * o.density_near[i] - iso > lowest;
+    o.near[i] =
+        in_box & !(o.len[i] * o.scale[i] > cull_distance) & reaches & (p.bone[i] != skip_bone);
   }
+  int n = 0;
+  for (int i = 0; i < m; ++i) {
+    o.listed[n] = i;
+    n += o.near[i];
+  }
+  o.nlisted = n;
 }
 
 // Pass A for the vertices of a patch: picks each one's collision candidates from `list`
@@ -433,13 +475,12 @@ void findCandidates(const Frame& fr, const PatchPoints& pts, std::span<const Lis
   for (const Listed& l : list) {
     const int c = l.c;
     DeformState::Collider& col = *l.col;
-    patchOffsets(col, pts, off);
+    patchOffsets(l, m.primitives.iso, pts, off);
     const PosedPrimitive& prim = *col.posed;
-    for (int i = 0; i < pts.count; ++i) {
-      if (off.near[i] == 0) continue;
+    for (int j = 0; j < off.nlisted; ++j) {
+      const int i = off.listed[j];
       const std::uint32_t v = pts.vertex[i];
       const auto vi = static_cast<std::size_t>(v);
-      if (l.same && !l.always_entry && col.prim == cal.prims[vi][3]) continue;  // its own bone
       // The skeleton distance d (as skeletonDistance), keeping the offset; its gradient gd
       // below, where the vertex penetrates.
       const glm::vec3 p0(pts.x[i], pts.y[i], pts.z[i]);
@@ -450,19 +491,10 @@ void findCandidates(const Frame& fr, const PatchPoints& pts, std::span<const Lis
       const float k_other = prim.stiffness;
       // A collider matters only where its term can be non-zero (see lowestTerm). Bound x over
       // the points within the cull margin of where the vertex was solved last frame (its
-      // rigid position offset by the warm start).
-      const float margin = pts.margin[i];
-      const float r_near = std::max(d - margin * col.inv_unit, 0.0f) * prim.inv_r_out;
-      const float density_near = densityValue(prim.density, r_near);
+      // rigid position offset by the warm start): patchOffsets has settled most colliders with
+      // the largest omega and the set's iso before the vertex's pairs are looked up.
+      const float density_near = off.density_near[i];
       const float lowest = l.lowest;
-      // First with the largest scale omega (below) the vertex can give the partner's field
-      // and the set's iso (no pair's threshold is lower: VertexPair::iso, validated): most
-      // colliders are settled before the vertex's pairs are looked up.
-      const float omega_bound =
-          l.rigid ? 1.0f
-                  : (l.same ? (l.adjacent ? pts.w[i] : std::max(pts.w[i], prim.max_skin_weight))
-                            : prim.max_skin_weight);
-      if (!(omega_bound * prim.weight * density_near - m.primitives.iso > lowest)) continue;
       float iso = m.primitives.iso;
       bool always = false;
       if (l.same) {
@@ -685,6 +717,7 @@ void passPenetration(Frame& fr, int first, int last) {
       pts.z[i] = pos[v].z;
       pts.margin[i] = kCullMargin + std::abs(st.offset[v]);
       pts.w[i] = cal.w[v];
+      pts.bone[i] = cal.prims[v][3];
     };
     if (n > 0) {
       describeList(fr, key, list, n, described);
