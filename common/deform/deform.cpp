@@ -656,6 +656,23 @@ int keepReachable(const Frame& fr, const Bounds& box, float offset_max, float w_
   return kept;
 }
 
+// The box of the n > 0 points pos[index[0..n)] (as glm::min and glm::max), a point to a
+// vector (built from its coordinates: a 16-byte load of three stored floats would stall).
+Bounds patchBox(const glm::vec3* pos, const std::uint32_t* index, std::uint32_t n) {
+  const auto load = [pos](std::uint32_t v) {
+    const glm::vec3& q = pos[v];
+    return FieldVec{q.x, q.y, q.z, 0.0f};
+  };
+  FieldVec lo = load(index[0]);
+  FieldVec hi = lo;
+  for (std::uint32_t i = 1; i < n; ++i) {
+    const FieldVec p = load(index[i]);
+    lo = p < lo ? p : lo;
+    hi = hi < p ? p : hi;
+  }
+  return {{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
+}
+
 // Pass A over patches [first, last): each patch's box, its collider list, then its
 // vertices' candidates, rigid-pose penetrations and the colliders' deepest penetrations.
 void passPenetration(Frame& fr, int first, int last) {
@@ -692,13 +709,10 @@ void passPenetration(Frame& fr, int first, int last) {
       for (std::uint32_t i = b; i < e; ++i) clear(st.order[i]);
       continue;
     }
-    Bounds box{pos[st.order[b]], pos[st.order[b]]};
+    const Bounds box = patchBox(pos.data(), st.order.data() + b, e - b);
     float offset_max = 0.0f;
     for (std::uint32_t i = b; i < e; ++i) {
-      const std::uint32_t v = st.order[i];
-      box.min = glm::min(box.min, pos[v]);
-      box.max = glm::max(box.max, pos[v]);
-      offset_max = std::max(offset_max, std::abs(st.offset[v]));
+      offset_max = std::max(offset_max, std::abs(st.offset[st.order[i]]));
     }
     int n = listColliders(fr, {key[0], key[1], key[2], kNoPrimitive}, always, box, list);
     if (n > 0) {
