@@ -477,24 +477,25 @@ void findCandidates(const Frame& fr, const PatchPoints& pts, std::span<const Lis
     DeformState::Collider& col = *l.col;
     patchOffsets(l, m.primitives.iso, pts, off);
     const PosedPrimitive& prim = *col.posed;
+    const float lowest = l.lowest;
+    // First each listed point's pair threshold and the partner field's scale omega where it
+    // needs no lookup; the points whose omega is the partner's skin weight are looked up
+    // after, in a loop of their own (each lookup is independent of the others, so the
+    // processor overlaps them); then the rest, point by point in the list's order.
+    int kept[kPatchSize];  // the points still in, in order
+    float kept_iso[kPatchSize];
+    float kept_omega[kPatchSize];
+    int nkept = 0;
+    int lookup[kPatchSize];  // indices into kept
+    int nlookup = 0;
     for (int j = 0; j < off.nlisted; ++j) {
       const int i = off.listed[j];
-      const std::uint32_t v = pts.vertex[i];
-      const auto vi = static_cast<std::size_t>(v);
-      // The skeleton distance d (as skeletonDistance), keeping the offset; its gradient gd
-      // below, where the vertex penetrates.
-      const glm::vec3 p0(pts.x[i], pts.y[i], pts.z[i]);
-      const glm::vec3 offset(off.x[i], off.y[i], off.z[i]);
-      const float scale = off.scale[i];
-      const float len = off.len[i];
-      const float d = len * scale;
-      const float k_other = prim.stiffness;
+      const auto vi = static_cast<std::size_t>(pts.vertex[i]);
       // A collider matters only where its term can be non-zero (see lowestTerm). Bound x over
       // the points within the cull margin of where the vertex was solved last frame (its
       // rigid position offset by the warm start): patchOffsets has settled most colliders with
       // the largest omega and the set's iso before the vertex's pairs are looked up.
       const float density_near = off.density_near[i];
-      const float lowest = l.lowest;
       float iso = m.primitives.iso;
       bool always = false;
       if (l.same) {
@@ -517,10 +518,39 @@ void findCandidates(const Frame& fr, const PatchPoints& pts, std::span<const Lis
           omega = pts.w[i];
         } else {
           if (!(prim.max_skin_weight * prim.weight * density_near - iso > lowest)) continue;
-          omega = skinWeight(prim, p0, offset, scale);
+          lookup[nlookup++] = nkept;
         }
       }
-      const float x_near = omega * prim.weight * density_near - iso;
+      kept[nkept] = i;
+      kept_iso[nkept] = iso;
+      kept_omega[nkept] = omega;
+      ++nkept;
+    }
+    for (int k = 0; k < nlookup; k += 4) {  // four at a time (the last lanes repeat one)
+      int at[4];
+      for (int j = 0; j < 4; ++j) at[j] = kept[lookup[std::min(k + j, nlookup - 1)]];
+      const auto gather = [&at](const float* a) {
+        return FieldVec{a[at[0]], a[at[1]], a[at[2]], a[at[3]]};
+      };
+      const FieldVec w =
+          skinWeightLanes(prim, gather(pts.x), gather(pts.y), gather(pts.z), gather(off.x),
+                          gather(off.y), gather(off.z), gather(off.scale), gather(off.len));
+      for (int j = 0; j < 4 && k + j < nlookup; ++j) kept_omega[lookup[k + j]] = w[j];
+    }
+    for (int k = 0; k < nkept; ++k) {
+      const int i = kept[k];
+      const std::uint32_t v = pts.vertex[i];
+      const auto vi = static_cast<std::size_t>(v);
+      // The skeleton distance d (as skeletonDistance), keeping the offset; its gradient gd
+      // below, where the vertex penetrates.
+      const glm::vec3 offset(off.x[i], off.y[i], off.z[i]);
+      const float scale = off.scale[i];
+      const float len = off.len[i];
+      const float d = len * scale;
+      const float k_other = prim.stiffness;
+      const float iso = kept_iso[k];
+      const float omega = kept_omega[k];
+      const float x_near = omega * prim.weight * off.density_near[i] - iso;
       if (!(x_near > lowest)) continue;
       if (count[i] == kMaxCandidates) {
         overflow[i] = true;

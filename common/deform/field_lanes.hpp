@@ -95,4 +95,60 @@ inline void fieldLanes(const FieldLanes& l, const glm::vec3& p, FieldValues& out
   std::memcpy(out.gz, &gz, sizeof gz);
 }
 
+// skinWeight (posed_primitives.hpp) of one primitive at four points, a point per lane: p, its
+// skeleton offset d with its scale, and len = |d| (as std::sqrt(glm::dot(d, d))). Each lane
+// makes skinWeight's operations in the same order, so the same values (where the compiler
+// fuses no multiply-adds in either); the lanes' lookups overlap.
+inline FieldVec skinWeightLanes(const PosedPrimitive& prim, FieldVec px, FieldVec py, FieldVec pz,
+                                FieldVec dx, FieldVec dy, FieldVec dz, FieldVec scale,
+                                FieldVec len) {
+  using Mask = int __attribute__((vector_size(16)));
+  const FieldVec zero = {0.0f, 0.0f, 0.0f, 0.0f};
+  const FieldVec one = {1.0f, 1.0f, 1.0f, 1.0f};
+  if (prim.skin_weight == nullptr || prim.skin_weight->n < 2) return one;
+  const SkinWeightGrid& g = *prim.skin_weight;
+  // The key (skinWeightKey): where the point's ray from the skeleton crosses r_out / 2.
+  const FieldVec r = len * scale * prim.inv_r_out;
+  const Mask on = r > zero;
+  const FieldVec k = 0.5f / r - 1.0f;
+  const FieldVec kx = on ? px + k * dx : px;
+  const FieldVec ky = on ? py + k * dy : py;
+  const FieldVec kz = on ? pz + k * dz : pz;
+  // In bind space: to_bind * (key, 1), column by column as glm's mat4 * vec4.
+  const glm::mat4& m = prim.to_bind;
+  const auto row = [&](int i) {
+    return (m[0][i] * kx + m[1][i] * ky) + (m[2][i] * kz + m[3][i] * 1.0f);
+  };
+  const FieldVec bx = row(0), by = row(1), bz = row(2);
+  // The cell and the position in it (skinWeightAt).
+  const float last = static_cast<float>(g.n - 1);
+  const FieldVec lastv = zero + last;
+  const auto cell = [&](FieldVec b, float lo, float hi, Mask& i, FieldVec& t) {
+    FieldVec u = (b - lo) / (hi - lo) * last;
+    u = u < zero ? zero : u;  // glm::clamp: min(max(u, 0), last)
+    u = lastv < u ? lastv : u;
+    i = __builtin_convertvector(u, Mask);
+    const Mask top = {g.n - 2, g.n - 2, g.n - 2, g.n - 2};
+    i = top < i ? top : i;
+    t = u - __builtin_convertvector(i, FieldVec);
+  };
+  Mask ix, iy, iz;
+  FieldVec tx, ty, tz;
+  cell(bx, g.box.min.x, g.box.max.x, ix, tx);
+  cell(by, g.box.min.y, g.box.max.y, iy, ty);
+  cell(bz, g.box.min.z, g.box.max.z, iz, tz);
+  const int n = g.n;
+  const Mask base = (iz * n + iy) * n + ix;
+  const float* const v = g.values.data();
+  const auto at = [&](int d) {
+    return FieldVec{v[base[0] + d], v[base[1] + d], v[base[2] + d], v[base[3] + d]};
+  };
+  const auto lerp = [](FieldVec a, FieldVec b, FieldVec s) { return a + s * (b - a); };
+  const int sy = n, sz = n * n;
+  const FieldVec y0 = lerp(lerp(at(0), at(1), tx), lerp(at(sy), at(sy + 1), tx), ty);
+  const FieldVec y1 =
+      lerp(lerp(at(sz), at(sz + 1), tx), lerp(at(sz + sy), at(sz + sy + 1), tx), ty);
+  return lerp(y0, y1, tz);
+}
+
 }  // namespace vistel

@@ -317,6 +317,71 @@ TEST(Primitive, FieldLanesMatchPrimitiveField) {
   EXPECT_EQ(out.f[1], posed[0].weight);
 }
 
+// The skin weights of one primitive at four points at a time (pass A's lookups) against
+// skinWeight, every shape posed by a turn and a shift, on random points, the skeleton's own
+// points (no ray: the key is the point itself) and points far beyond the grid (clamped to
+// its faces): the same values, bit for bit where the compiler fuses no multiply-adds (x86-64
+// without FMA, as built here). Without a grid the weight is 1.
+TEST(Primitive, SkinWeightLanesMatchSkinWeight) {
+  const glm::mat4 xform = glm::rotate(glm::translate(glm::mat4(1.0f), glm::vec3(0.3f, -0.2f, 0.5f)),
+                                      0.7f, glm::normalize(glm::vec3(1.0f, 2.0f, -0.5f)));
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> u(-0.3f, 0.3f);
+  std::uniform_real_distribution<float> weight(kMinSkinWeight, 4.0f);
+  int exact = 0, total = 0;
+  for (const Shape& s : shapes()) {
+    Primitive prim;
+    prim.shape = s;
+    prim.r_in = s.kind == ShapeKind::kConeSphere ? 1.5f : 0.06f;
+    prim.r_out = prim.r_in / 0.6f;
+    SkinWeightGrid& g = prim.skin_weight;
+    g.n = 6;
+    g.box = {s.a - glm::vec3(0.2f, 0.25f, 0.15f), s.a + glm::vec3(0.3f, 0.2f, 0.25f)};
+    g.values.resize(static_cast<std::size_t>(g.n * g.n * g.n));
+    g.max_value = 0.0f;
+    for (float& w : g.values) {
+      w = weight(rng);
+      g.max_value = std::max(g.max_value, w);
+    }
+    const PosedPrimitive posed = posePrimitive(prim, xform);
+    ASSERT_NE(posed.skin_weight, nullptr);
+    for (int i = 0; i < 100; ++i) {
+      glm::vec3 p[4], d[4];
+      float scale[4], len[4];
+      for (int j = 0; j < 4; ++j) {
+        p[j] = centre(posed.shape) + glm::vec3(u(rng), u(rng), u(rng));
+        if (i == 0 && j == 0) p[j] = posed.shape.a;  // on the skeleton
+        if (i == 1 && j == 1) p[j] = posed.shape.a + glm::vec3(5.0f, -4.0f, 3.0f);  // far out
+        d[j] = skeletonOffset(posed.shape, p[j], scale[j]);
+        len[j] = std::sqrt(glm::dot(d[j], d[j]));
+      }
+      const auto lanes = [](const auto& get) { return FieldVec{get(0), get(1), get(2), get(3)}; };
+      const FieldVec w = skinWeightLanes(
+          posed, lanes([&](int j) { return p[j].x; }), lanes([&](int j) { return p[j].y; }),
+          lanes([&](int j) { return p[j].z; }), lanes([&](int j) { return d[j].x; }),
+          lanes([&](int j) { return d[j].y; }), lanes([&](int j) { return d[j].z; }),
+          lanes([&](int j) { return scale[j]; }), lanes([&](int j) { return len[j]; }));
+      for (int j = 0; j < 4; ++j) {
+        const float expected = skinWeight(posed, p[j], d[j], scale[j]);
+        ASSERT_NEAR(w[j], expected, 1e-5f * expected)
+            << "kind " << static_cast<int>(s.kind) << " point " << i << " lane " << j;
+        ASSERT_GE(w[j], kMinSkinWeight);
+        exact += w[j] == expected ? 1 : 0;
+        ++total;
+      }
+    }
+  }
+#if defined(__x86_64__) && !defined(__FMA__)
+  EXPECT_EQ(exact, total);
+#endif
+  Primitive plain;
+  plain.shape = shapes()[0];
+  const PosedPrimitive no_grid = posePrimitive(plain, xform);
+  const FieldVec one = skinWeightLanes(no_grid, FieldVec{}, FieldVec{}, FieldVec{}, FieldVec{},
+                                       FieldVec{}, FieldVec{}, FieldVec{}, FieldVec{});
+  for (int j = 0; j < 4; ++j) EXPECT_EQ(one[j], 1.0f);
+}
+
 TEST(Primitive, DistanceMatchesBruteForceAndGradientMatchesFiniteDifferences) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> u(-0.3f, 0.3f);
