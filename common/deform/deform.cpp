@@ -73,6 +73,8 @@ struct Candidate {
   float rho = 1.0f;    // (1 - lambda) / lambda: weight of the penetration term (lambda > 0)
   bool hard = false;   // lambda = 0 (rigid partner, soft vertex): a constraint, see below
   float bulge = 0.0f;  // propagation amplitude (field units), 0 when off
+  // A free vertex's omega F - iso at its rigid position (CandidateSlot::x_rigid).
+  float x_rigid = -INFINITY;
   int collider = 0;
   int lane = -1;  // the vertex's own packed lane holding the same primitive, or -1 (the
                   // joint's opposite limb is both: its own field in DIFF and a collider)
@@ -88,6 +90,8 @@ struct VertexProblem {
   float iso = 0.5f;
   int diff_exponent = 4;
   glm::vec3 p0{0.0f};      // origin of the projection line (the rigid position)
+  bool p0_rigid = false;   // a free vertex's p0, its rigid position (where the candidates'
+                           // x_rigid hold)
   glm::vec3 n0{0.0f};      // rigid normal
   glm::vec3 anchor{0.0f};  // free vertices: their plane passes through this (rigid position)
   float width = 1.0f;
@@ -220,10 +224,17 @@ inline glm::vec3 gradientNear(const VertexProblem& vp, const glm::vec3& p, float
 inline int deepestHard(VertexProblem& vp, const glm::vec3& p, float& x_out) {
   int best = -1;
   x_out = -INFINITY;
+  // At a free vertex's rigid position pass A has evaluated them (the same bits; -infinity
+  // outside their boxes).
+  const bool at_rigid = vp.p0_rigid && p == vp.p0;
   for (int i = 0; i < vp.ncand; ++i) {
     const Candidate& c = vp.cand[i];
-    if (!c.hard || !inBounds(*c.prim, p)) continue;
-    const float x = c.omega * primitiveField(*c.prim, p) - c.iso;
+    if (!c.hard) continue;
+    float x = c.x_rigid;
+    if (!at_rigid) {
+      if (!inBounds(*c.prim, p)) continue;
+      x = c.omega * primitiveField(*c.prim, p) - c.iso;
+    }
     if (x > x_out) {
       x_out = x;
       best = i;
@@ -283,6 +294,7 @@ void gatherOwn(const Frame& fr, int v, VertexProblem& vp) {
   vp.iso = m.primitives.iso;
   vp.diff_exponent = m.primitives.diff_exponent;
   vp.p0 = fr.in->rigid_positions[vi];
+  vp.p0_rigid = vp.cls == VertexClass::kFree;
   vp.n0 = fr.in->rigid_normals[vi];
   vp.anchor = vp.p0;
   vp.width = m.primitives.propagation_width;
@@ -562,6 +574,17 @@ void findCandidates(const Frame& fr, const PatchPoints& pts, std::span<const Lis
       cs.reach = x_near;
       cs.omega = omega;
       cs.collider = static_cast<std::uint16_t>(c);
+      // A free vertex's x at its rigid position, where its solve looks at its partners first
+      // (every one hard, see deepestHard), as primitiveField gives it: the same operations on
+      // the same offset.
+      if (cal.vertex_class[vi] == VertexClass::kFree) {
+        const float s_r = scale * prim.inv_r_out;
+        const float s2 = s_r * s_r;
+        const float u = glm::dot(offset, offset) * s2;
+        const float f_rigid = u >= 1.0f ? 0.0f : prim.weight * densityValueSquared(prim.density, u);
+        cs.x_rigid = inBounds(prim, glm::vec3(pts.x[i], pts.y[i], pts.z[i])) ? omega * f_rigid - iso
+                                                                             : -INFINITY;
+      }
       ++count[i];
       // Rigid-pose penetration into this collider.
       const float r = d * prim.inv_r_out;
@@ -620,6 +643,7 @@ void loadCandidates(const Frame& fr, int v, bool with_bulge, VertexProblem& vp) 
     cd.rho = cd.hard ? 0.0f : cd.share / (1.0f - cd.share);
     cd.omega = cs.omega;
     cd.iso = cs.iso;
+    cd.x_rigid = cs.x_rigid;
     const float pmax = std::bit_cast<float>(col.pmax_bits);
     const bool bulges = with_bulge && (col.body != fr.self || fr.opt->self_propagation);
     cd.bulge = bulges ? 2.0f * cd.share * vp.w * amplitude * pmax : 0.0f;
@@ -1430,6 +1454,7 @@ void passRelax(Frame& fr, int first, int count, DeformCounters& cnt) {
     ++cnt.evaluations;
     const float own_side_start = vp.own_side;
     vp.p0 = q;
+    vp.p0_rigid = false;
     bool iterated = false;
     const std::int64_t iterations = cnt.iterations;  // the projection's count as relaxation's
     const RootResult res =

@@ -224,6 +224,9 @@ struct DeformState {
     float reach = 0.0f;          // the largest x = omega F_i - iso within the vertex's cull margin
     float omega = 1.0f;          // the partner field's scale: its skin weight near the vertex, 1
                                  // for a rigid partner
+    float x_rigid = -INFINITY;   // a free vertex's x = omega F_i - iso at its rigid position
+                                 // (-infinity outside the partner's box), as its solve would
+                                 // evaluate it
     std::uint16_t collider = 0;  // index into colliders
   };
   std::vector<CandidateSlot> candidates;    // (nvert * kMaxCandidates)
