@@ -15,6 +15,9 @@
 // multiply-adds in either; x86-64 without FMA, as built here). The Wyvill profile only; a
 // general polygon, or another profile, is not packed (the caller evaluates it alone).
 //
+// Also one primitive's skin weight at four points, a point per lane (skinWeightLanes: pass A's
+// lookups, which are independent of each other, side by side).
+//
 // Portable: GCC/Clang vector extensions (SSE on x86-64, NEON on AArch64, scalar elsewhere).
 #pragma once
 
