@@ -441,13 +441,12 @@ void patchOffsets(const Listed& l, float iso, const PatchPoints& p, PatchOffsets
     o.len[i] = std::sqrt(o.x[i] * o.x[i] + o.y[i] * o.y[i] + o.z[i] * o.z[i]);
     const float d = o.len[i] * o.scale[i];
     const float r_near = std::max(d - p.margin[i] * inv_unit, 0.0f) * inv_r_out;
-    o.density_near[i] = r_near;
+    o.density_near[i] = r_near;  // (the profile's argument, for the loop below)
   }
   if (prim.density.kind == DensityKind::kWyvill) {
     for (int i = 0; i < m; ++i) {  // densityValue without the branches
       const float r = o.density_near[i];
-      const float r2 = r * r;
-      const float f = 1.0f + r2 * (-22.0f / 9.0f + r2 * (17.0f / 9.0f - 4.0f / 9.0f * r2));
+      const float f = wyvillPolynomial(r * r);
       o.density_near[i] = r <= 0.0f ? 1.0f : (r >= 1.0f ? 0.0f : f);
     }
   } else {
@@ -575,15 +574,12 @@ void findCandidates(const Frame& fr, const PatchPoints& pts, std::span<const Lis
       cs.omega = omega;
       cs.collider = static_cast<std::uint16_t>(c);
       // A free vertex's x at its rigid position, where its solve looks at its partners first
-      // (every one hard, see deepestHard), as primitiveField gives it: the same operations on
-      // the same offset.
+      // (every one hard, see deepestHard), as primitiveField gives it: the same offset
+      // (skeletonOffsets), the same fieldAtOffset.
       if (cal.vertex_class[vi] == VertexClass::kFree) {
-        const float s_r = scale * prim.inv_r_out;
-        const float s2 = s_r * s_r;
-        const float u = glm::dot(offset, offset) * s2;
-        const float f_rigid = u >= 1.0f ? 0.0f : prim.weight * densityValueSquared(prim.density, u);
-        cs.x_rigid = inBounds(prim, glm::vec3(pts.x[i], pts.y[i], pts.z[i])) ? omega * f_rigid - iso
-                                                                             : -INFINITY;
+        cs.x_rigid = inBounds(prim, glm::vec3(pts.x[i], pts.y[i], pts.z[i]))
+                         ? omega * fieldAtOffset(prim, offset, scale) - iso
+                         : -INFINITY;
       }
       ++count[i];
       // Rigid-pose penetration into this collider.

@@ -27,6 +27,12 @@ bool validDensity(const Density& density);
 // The piecewise profile (out of line).
 float piecewiseDensity(const Density& density, float r, float* derivative);
 
+// Wyvill's polynomial in u = r^2, 1 - 22/9 u + 17/9 u^2 - 4/9 u^3, for u in [0, 1] (no clamp):
+// the one expression the profile's functions below share.
+inline float wyvillPolynomial(float u) {
+  return 1.0f + u * (-22.0f / 9.0f + u * (17.0f / 9.0f - 4.0f / 9.0f * u));
+}
+
 // f(r) and f'(r) for r in [0, 1]; r outside is clamped (f = 1 below 0, 0 above 1, f' = 0).
 // Cost: a few multiplications; no branches beyond the piece test.
 inline float densityValue(const Density& d, float r, float* derivative = nullptr) {
@@ -40,7 +46,7 @@ inline float densityValue(const Density& d, float r, float* derivative = nullptr
   if (derivative != nullptr) {
     *derivative = r * (-24.0f / 9.0f * r4 + 68.0f / 9.0f * r2 - 44.0f / 9.0f);
   }
-  return 1.0f + r2 * (-22.0f / 9.0f + r2 * (17.0f / 9.0f - 4.0f / 9.0f * r2));
+  return wyvillPolynomial(r2);
 }
 
 // The same profile as a function of u = r^2: f and df/du (the Wyvill polynomial is one in
@@ -60,7 +66,7 @@ inline float densityValueSquared(const Density& d, float u, float* derivative_u 
   if (derivative_u != nullptr) {
     *derivative_u = -22.0f / 9.0f + u * (34.0f / 9.0f - 12.0f / 9.0f * u);
   }
-  return 1.0f + u * (-22.0f / 9.0f + u * (17.0f / 9.0f - 4.0f / 9.0f * u));
+  return wyvillPolynomial(u);
 }
 
 // The u in (0, 1) where the profile of densityValueSquared takes the value f in (0, 1): for

@@ -48,12 +48,11 @@ void posePrimitives(const PrimitiveSet& set, std::span<const glm::mat4> skin_xfo
 // One primitive carried by one transform (rest posture: the identity).
 PosedPrimitive posePrimitive(const Primitive& primitive, const glm::mat4& xform);
 
-// F_i(p) and, optionally, its gradient (zero outside the support and on the skeleton).
-// From the squared skeleton distance: no square root for the Wyvill profile.
-inline float primitiveField(const PosedPrimitive& prim, const glm::vec3& p,
-                            glm::vec3* gradient = nullptr) {
-  float scale;
-  const glm::vec3 d = skeletonOffset(prim.shape, p, scale);
+// F_i at the point whose skeleton offset is d, with its scale (skeletonOffset), and optionally
+// its gradient (zero outside the support and on the skeleton). From the squared skeleton
+// distance: no square root for the Wyvill profile.
+inline float fieldAtOffset(const PosedPrimitive& prim, const glm::vec3& d, float scale,
+                           glm::vec3* gradient = nullptr) {
   const float s = scale * prim.inv_r_out;
   const float s2 = s * s;
   const float u = glm::dot(d, d) * s2;  // (distance / r_out)^2
@@ -65,6 +64,14 @@ inline float primitiveField(const PosedPrimitive& prim, const glm::vec3& p,
   const float f = densityValueSquared(prim.density, u, gradient != nullptr ? &fu : nullptr);
   if (gradient != nullptr) *gradient = (2.0f * prim.weight * fu * s2) * d;
   return prim.weight * f;
+}
+
+// F_i(p) and, optionally, its gradient (fieldAtOffset).
+inline float primitiveField(const PosedPrimitive& prim, const glm::vec3& p,
+                            glm::vec3* gradient = nullptr) {
+  float scale;
+  const glm::vec3 d = skeletonOffset(prim.shape, p, scale);
+  return fieldAtOffset(prim, d, scale, gradient);
 }
 
 // Where p's ray from the skeleton (from its closest skeleton point through p) crosses the
