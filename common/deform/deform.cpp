@@ -1075,16 +1075,14 @@ inline float writeSolved(const Frame& fr, int v, const glm::vec3& p0, const glm:
   return s_out;
 }
 
-// Pass B's short way for the commonest solved vertex: a limb vertex of one primitive (no
-// bone) with no collider and no elastic memory, projected along its normal (see
-// solveLoneLimb).
-bool loneLimb(const Frame& fr, std::size_t vi) {
-  const DeformState& st = *fr.st;
-  const Calibration& cal = fr.model->calibration;
+// Pass B's short way for the commonest solved vertex, the lone limb vertex: a limb vertex of
+// one primitive (no bone), not fixed (DeformState::fixed_kind), that has no collider and no
+// elastic memory this frame and is projected along its normal, as it was last frame (see
+// solveLoneLimb). Its part that never changes (DeformState::lone_kind); passSolve tests the
+// rest.
+bool loneKind(const Calibration& cal, std::size_t vi, bool fixed) {
   const auto& pr = cal.prims[vi];
-  return cal.vertex_class[vi] == VertexClass::kLimb && pr[3] < 0 && pr[0] >= 0 &&
-         st.cand_count[vi] == 0 && st.memory[vi] == 0.0f &&
-         fr.opt->projection == ProjectionMode::kNormal && (st.flags[vi] & kVertexGradient) == 0;
+  return !fixed && cal.vertex_class[vi] == VertexClass::kLimb && pr[3] < 0 && pr[0] >= 0;
 }
 
 // A lone limb vertex's equation w_v F_p0(p) - T, and its gradient.
@@ -1111,7 +1109,7 @@ LoneStart loneStart(const Frame& fr, std::size_t vi) {
   return start;
 }
 
-// Solves a lone limb vertex (loneLimb) from its first evaluation `start` (loneStart): its
+// Solves a lone limb vertex (see loneKind) from its first evaluation `start` (loneStart): its
 // equation is w_v F_p0 - T alone, so it skips gathering a problem. Returns false, having
 // changed nothing, where the full way is needed (the normal disagrees with the field's
 // gradient, or finds no root); otherwise the result is the full way's, bit for bit.
@@ -1210,14 +1208,25 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
   for (int v = first; v < last; ++v) {
     vertex_flags[v] = resting[v] != 0 ? std::uint8_t{0} : vertex_flags[v];
   }
-  // The list, eight resting vertices (a word of ones) at a time.
+  // The lists, eight resting vertices (a word of ones) at a time: the lone limb vertices
+  // (loneKind and the rest, tested without a branch) in one, the others in the other, each in
+  // vertex order.
   std::uint32_t* const work = st.solve_list.data() + first;
+  std::uint32_t* const lone = st.lone_list.data() + first;
+  const std::uint8_t* const lone_kind = st.lone_kind.data();
+  const std::uint8_t lone_way = along_normal ? 1 : 0;
   int nwork = 0;
+  int nlone = 0;
   int next = first;
   const auto list = [&](int end) {
     for (; next < end; ++next) {
+      const std::uint8_t is_lone = lone_kind[next] & lone_way & (cand_count[next] == 0 ? 1 : 0) &
+                                   (memory[next] == 0.0f ? 1 : 0) &
+                                   ((vertex_flags[next] & kVertexGradient) == 0 ? 1 : 0);
       work[nwork] = static_cast<std::uint32_t>(next);
-      nwork += resting[next] ^ 1;
+      nwork += (resting[next] | is_lone) ^ 1;
+      lone[nlone] = static_cast<std::uint32_t>(next);
+      nlone += is_lone;
     }
   };
   while (next + 8 <= last) {
@@ -1230,34 +1239,22 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
     }
   }
   list(last);
-  cnt.rigid_vertices += (last - first) - nwork;
+  cnt.rigid_vertices += (last - first) - nwork - nlone;
   // The lone limb vertices first, a batch at a time: their first evaluations in a loop of
   // their own (each independent of the others: the processor overlaps them), then the rest of
-  // each one's solve. The others, and any the short way leaves, stay listed for the loop below
-  // (no lone one touches a collider or is relaxed, so the contact and relaxation lists keep
-  // vertex order).
+  // each one's solve. Any the short way leaves join the others' list, after them (no lone one
+  // touches a collider or is relaxed, so the contact and relaxation lists keep vertex order).
   constexpr int kLoneBatch = 32;
-  std::uint32_t lone[kLoneBatch];
   LoneStart starts[kLoneBatch];
-  int nlone = 0;
-  int nfull = 0;
-  const auto solve_lone = [&]() {
-    for (int i = 0; i < nlone; ++i) starts[i] = loneStart(fr, lone[i]);
-    for (int i = 0; i < nlone; ++i) {
-      if (!solveLoneLimb(fr, static_cast<int>(lone[i]), starts[i], cnt)) work[nfull++] = lone[i];
+  for (int k0 = 0; k0 < nlone; k0 += kLoneBatch) {
+    const int n = std::min(kLoneBatch, nlone - k0);
+    for (int i = 0; i < n; ++i) starts[i] = loneStart(fr, lone[k0 + i]);
+    for (int i = 0; i < n; ++i) {
+      const std::uint32_t v = lone[k0 + i];
+      if (!solveLoneLimb(fr, static_cast<int>(v), starts[i], cnt)) work[nwork++] = v;
     }
-    nlone = 0;
-  };
-  for (int k = 0; k < nwork; ++k) {
-    const std::uint32_t v = work[k];
-    if (is_fixed(v) || !loneLimb(fr, v)) {
-      work[nfull++] = v;
-      continue;
-    }
-    lone[nlone++] = v;
-    if (nlone == kLoneBatch) solve_lone();
   }
-  solve_lone();
+  const int nfull = nwork;
   for (int k = 0; k < nfull; ++k) {
     const int v = static_cast<int>(work[k]);
     const auto vi = static_cast<std::size_t>(v);
@@ -1821,7 +1818,12 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
             ? 1
             : 0;
   }
+  st.lone_kind.resize(nv);
+  for (std::size_t v = 0; v < nv; ++v) {
+    st.lone_kind[v] = loneKind(model.calibration, v, st.fixed_kind[v] != 0) ? 1 : 0;
+  }
   st.solve_list.assign(nv, 0);
+  st.lone_list.assign(nv, 0);
   st.joint_prefix.assign(nv + 1, 0);
   for (std::size_t v = 0; v < nv; ++v) {
     st.joint_prefix[v + 1] =

@@ -247,8 +247,12 @@ struct DeformState {
   bool any_inelastic = false;  // a primitive is plastic or viscoelastic (free_offset is kept)
   std::vector<std::uint8_t> fixed_kind;    // rigid limb or free vertex (nvert)
   std::vector<std::uint8_t> resting;       // pass B: fixed, nothing near (nvert)
-  std::vector<std::uint32_t> solve_list;   // (nvert) the others, each chunk's from
-                                           // its first vertex on
+  std::vector<std::uint8_t> lone_kind;     // limb vertex of one primitive, no bone, not
+                                           // fixed (nvert; see loneKind)
+  std::vector<std::uint32_t> solve_list;   // (nvert) pass B: the vertices solved the full
+                                           // way, each chunk's from its first vertex on
+  std::vector<std::uint32_t> lone_list;    // (nvert) pass B: the lone limb vertices, each
+                                           // chunk's from its first vertex on
   std::vector<std::uint32_t> smooth_pool;  // joint vertices and the free ones
                                            // beside them (init)
   std::vector<std::uint32_t> smooth_list;  // those smoothed this frame (capacity:
