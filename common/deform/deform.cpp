@@ -1254,8 +1254,7 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
       if (!solveLoneLimb(fr, static_cast<int>(v), starts[i], cnt)) work[nwork++] = v;
     }
   }
-  const int nfull = nwork;
-  for (int k = 0; k < nfull; ++k) {
+  for (int k = 0; k < nwork; ++k) {
     const int v = static_cast<int>(work[k]);
     const auto vi = static_cast<std::size_t>(v);
     const bool fixed = is_fixed(vi);
