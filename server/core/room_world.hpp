@@ -32,7 +32,7 @@
 #include "server/core/collision_model.hpp"
 #include "server/core/handles.hpp"
 #include "server/core/props.hpp"
-#include "server/core/seat.hpp"
+#include "common/scene/seat_layout.hpp"
 
 namespace vistel::server {
 

@@ -123,8 +123,13 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
   }
 
   ConfigTable room(root, "room", source_name);
-  VISTEL_TRY(room.number("seat_radius_m", c.seat_radius_m, 0.1, 100));
+  VISTEL_TRY(room.number("seat_radius_m", c.seat_layout.first_radius_m, 0.1, 100));
+  VISTEL_TRY(room.number("seat_spacing_m", c.seat_layout.spacing_m, 0.1, 100));
+  VISTEL_TRY(room.number("ring_gap_m", c.seat_layout.ring_gap_m, 0.1, 100));
   VISTEL_TRY(room.checkUnknown());
+  if (Status layout = validateSeatLayout(c.seat_layout); !layout) {
+    return fail("{}: [room] {}", source_name, layout.error().message);
+  }
 
   ConfigTable world(root, "world", source_name);
   VISTEL_TRY(world.number("gravity_mps2", c.gravity_mps2, 0, 100));

@@ -13,6 +13,7 @@
 #include <glm/glm.hpp>
 
 #include "common/base/result.hpp"
+#include "common/scene/seat_layout.hpp"
 #include "server/core/props.hpp"
 
 namespace vistel::server {
@@ -36,7 +37,7 @@ struct ServerConfig {
   // [limits]
   int max_rooms = 64;
   int max_members = 1024;  // over all rooms (<= 65535)
-  int max_members_per_room = 16;
+  int max_members_per_room = 128;
   std::size_t max_frame_bytes = 256u << 10;        // TCP control frame payload
   std::size_t max_avatar_bytes = 16u << 20;        // one avatar file
   std::size_t avatar_chunk_bytes = 64u << 10;      // AvatarChunk.data, both directions (<= 512 KiB)
@@ -47,7 +48,8 @@ struct ServerConfig {
   int max_primitives_per_avatar = 64;    // collision model limits checked at upload
   float max_primitive_extent_m = 2.0f;   // largest side of a primitive's field box at rest
   // [room]
-  float seat_radius_m = 1.5f;  // members stand on a circle of this radius facing its centre
+  SeatLayout seat_layout;  // rings of seats about the centre (seat_radius_m, seat_spacing_m,
+                           // ring_gap_m)
   // [world]
   float gravity_mps2 = 9.81f;         // downwards (-Y)
   float floor_height_m = 0.0f;        // a rigid floor plane at this height

@@ -20,7 +20,7 @@
 #include "common/avatar/avatar_io.hpp"
 #include "common/deform/interactions.hpp"
 #include "server/core/collision_model.hpp"
-#include "server/core/seat.hpp"
+#include "common/scene/seat_layout.hpp"
 #include "server/core/server_core.hpp"
 #include "tests/net/sim_network.hpp"
 #include "tests/net/synthetic_avatar.hpp"
@@ -73,7 +73,7 @@ struct QuietLogs {
 // models and seats; every client receives the same list.
 TEST(CollisionWorld, InteractionsAcrossMembersMatchADirectComputation) {
   ServerConfig config = worldConfig();
-  config.seat_radius_m = 0.3f;  // close enough for arms to reach each other
+  config.seat_layout = SeatLayout{0.3f, 0.3f, 1.0f};  // close enough for arms to reach
   SimNetwork net(config, 21);
   const auto avatar = test::encodeSynthetic(test::makeCollidingAvatar());
   const std::vector<std::string> names = {"ann", "ben", "cy"};

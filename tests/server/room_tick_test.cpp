@@ -8,7 +8,7 @@
 #include "common/wire/packets.hpp"
 #include "server/core/collision_model.hpp"
 #include "server/core/room.hpp"
-#include "server/core/seat.hpp"
+#include "common/scene/seat_layout.hpp"
 #include "tests/net/synthetic_avatar.hpp"
 #include "tests/support/alloc_counter.hpp"
 
@@ -36,7 +36,7 @@ TEST(RoomTick, AllocatesNothingOnceWarm) {
     c.room = room_id;
     c.member = MemberId{0x00010000u + static_cast<std::uint32_t>(i)};
     c.key = 100u + static_cast<std::uint64_t>(i);
-    c.seat = seatPlacement(i, 0.3f);
+    c.seat = seatPlacement(i, SeatLayout{0.3f, 0.3f, 1.0f});
     c.joint_count = 5;
     c.collision = *model;
     room.apply(c, 0.0);

@@ -389,20 +389,6 @@ TEST(ServerCoreSnapshots, LargeRoomsSplitSnapshotsAcrossDatagrams) {
   }
 }
 
-TEST(SeatPlacement, FirstSeatsSpreadOutAndFaceTheCentre) {
-  const SeatPlacement s0 = seatPlacement(0, 1.5f);
-  const SeatPlacement s1 = seatPlacement(1, 1.5f);
-  EXPECT_NEAR(s0.x, -s1.x, 1e-5f);
-  EXPECT_NEAR(s0.z, -s1.z, 1e-5f);
-  for (int i = 0; i < 20; ++i) {
-    const SeatPlacement s = seatPlacement(i, 1.5f);
-    // Facing direction (+Z rotated by yaw) points at the centre.
-    const glm::vec3 facing(std::sin(s.yaw), 0.0f, std::cos(s.yaw));
-    const glm::vec3 to_centre = glm::normalize(glm::vec3(-s.x, 0.0f, -s.z));
-    EXPECT_GT(glm::dot(facing, to_centre), 0.9999f) << i;
-  }
-}
-
 TEST(ServerConfig, DefaultsParseAndErrorsNameTheKey) {
   auto embedded = loadServerConfig("config/server.toml");
   ASSERT_TRUE(embedded) << embedded.error().message;
