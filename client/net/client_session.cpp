@@ -145,6 +145,9 @@ void ClientSession::handleMessage(const control::ServerMessage& msg, double now)
       if (w.upload_avatar()) {
         avatar_pending_ = true;  // postures wait until the server has the avatar
         uploadAvatar(std::clamp<std::size_t>(w.max_chunk_bytes(), 256, 1u << 20));
+      } else if (w.avatar_pending()) {
+        avatar_pending_ = true;  // another member uploads the same file
+        spdlog::info("the server is receiving our avatar from another member; waiting");
       }
       // Start the UDP handshake at once.
       state_ = SessionState::kHandshaking;
@@ -168,10 +171,19 @@ void ClientSession::handleMessage(const control::ServerMessage& msg, double now)
       if (it != downloads_.end()) downloads_.erase(it);  // retried on the next roster
       return;
     }
-    case control::ServerMessage::kError:
+    case control::ServerMessage::kUploadAvatar:
+      // The upload we waited for failed: ours takes over.
+      if (msg.upload_avatar().hash() != settings_.avatar_hash) return;
+      avatar_pending_ = true;
+      uploadAvatar(std::clamp<std::size_t>(msg.upload_avatar().max_chunk_bytes(), 256, 1u << 20));
+      return;
+    case control::ServerMessage::kError: {
+      const float hint = msg.error().retry_after_s();
       close(fmt::format("server: {}: {}", control::ErrorReply::Code_Name(msg.error().code()),
                         msg.error().message()));
+      if (std::isfinite(hint) && hint > 0.0f) retry_after_s_ = std::min(3600.0, double{hint});
       return;
+    }
     case control::ServerMessage::BODY_NOT_SET:
       return;
   }
@@ -474,6 +486,7 @@ void ClientSession::update(double now) {
     case SessionState::kJoining:
       if (now - state_since_ > settings_.join_timeout_s) {
         close(fmt::format("no Welcome from the server within {:.0f} s", settings_.join_timeout_s));
+        retry_after_s_ = 1.0;  // a busy server: worth another try
       }
       break;
     case SessionState::kHandshaking:

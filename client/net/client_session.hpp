@@ -163,6 +163,9 @@ class ClientSession {
 
   SessionState state() const { return state_; }
   const std::string& error() const { return error_; }
+  // Closed by a refusal the server called transient (ErrorReply.retry_after_s, or no
+  // Welcome in time): seconds it suggests waiting before joining again; 0 otherwise.
+  double retryAfter() const { return retry_after_s_; }
   std::uint32_t memberId() const { return member_id_; }
   double tickRateHz() const { return tick_rate_hz_; }
   const ClockSync& clock() const { return clock_; }
@@ -226,6 +229,7 @@ class ClientSession {
   std::shared_ptr<AvatarCache> cache_;
   SessionState state_ = SessionState::kJoining;
   std::string error_;
+  double retry_after_s_ = 0.0;
   wire::FrameDecoder decoder_;
   SessionOutbox outbox_;
 

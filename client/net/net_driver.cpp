@@ -1,6 +1,8 @@
 #include "client/net/net_driver.hpp"
 
 #include <charconv>
+#include <functional>
+#include <random>
 
 #include <spdlog/spdlog.h>
 
@@ -47,13 +49,14 @@ double monotonicSeconds() {
 
 std::shared_ptr<NetDriver> NetDriver::create(asio::io_context& io, ServerAddress server,
                                              SessionSettings settings,
-                                             std::shared_ptr<AvatarCache> cache) {
+                                             std::shared_ptr<AvatarCache> cache,
+                                             const BackoffSettings& backoff) {
   return std::shared_ptr<NetDriver>(
-      new NetDriver(io, std::move(server), std::move(settings), std::move(cache)));
+      new NetDriver(io, std::move(server), std::move(settings), std::move(cache), backoff));
 }
 
 NetDriver::NetDriver(asio::io_context& io, ServerAddress server, SessionSettings settings,
-                     std::shared_ptr<AvatarCache> cache)
+                     std::shared_ptr<AvatarCache> cache, const BackoffSettings& backoff)
     : io_(io),
       strand_(asio::make_strand(io)),
       server_(std::move(server)),
@@ -61,7 +64,11 @@ NetDriver::NetDriver(asio::io_context& io, ServerAddress server, SessionSettings
       tcp_(strand_),
       udp_(strand_),
       timer_(strand_),
-      session_(std::move(settings), std::move(cache)),
+      settings_(std::move(settings)),
+      cache_(std::move(cache)),
+      session_(std::make_unique<ClientSession>(settings_, cache_)),
+      backoff_(backoff, std::random_device{}() ^ std::hash<std::string>{}(settings_.name)),
+      retry_timer_(strand_),
       read_buffer_(16u << 10),
       datagram_buffer_(65536) {
   (void)monotonicSeconds();
@@ -69,56 +76,113 @@ NetDriver::NetDriver(asio::io_context& io, ServerAddress server, SessionSettings
 
 NetDriver::~NetDriver() = default;
 
+int NetDriver::rejoins() const {
+  std::lock_guard lock(mutex_);
+  return rejoins_;
+}
+
+double NetDriver::secondsToLive() const {
+  std::lock_guard lock(mutex_);
+  return live_after_s_;
+}
+
 void NetDriver::start() {
-  auto self = shared_from_this();
-  asio::post(strand_, [this, self] {
-    resolver_.async_resolve(
-        server_.host, std::to_string(server_.port),
-        [this, self](const boost::system::error_code& ec,
-                     asio::ip::tcp::resolver::results_type results) {
-          if (ec) {
-            fail("cannot resolve '" + server_.host + "': " + ec.message());
-            return;
-          }
-          asio::async_connect(
-              tcp_, results,
-              [this, self](const boost::system::error_code& cec,
-                           const asio::ip::tcp::endpoint& endpoint) {
-                if (cec) {
-                  fail("cannot connect to " + server_.host + ":" + std::to_string(server_.port) +
-                       ": " + cec.message());
-                  return;
-                }
-                boost::system::error_code e;
-                tcp_.set_option(asio::ip::tcp::no_delay(true), e);
-                // UDP to the same address and port, connected (only its datagrams arrive).
-                const asio::ip::udp::endpoint udp_ep(endpoint.address(), endpoint.port());
-                udp_.open(udp_ep.protocol(), e);
-                if (!e) udp_.connect(udp_ep, e);
-                if (e) {
-                  fail("cannot open UDP to " + udp_ep.address().to_string() + ": " + e.message());
-                  return;
-                }
-                connected_ = true;
-                {
-                  std::lock_guard lock(mutex_);
-                  session_.start(monotonicSeconds());
-                }
-                flush();
-                readStream();
-                readDatagram();
-                armTimer();
-              });
-        });
+  {
+    std::lock_guard lock(mutex_);
+    started_at_ = monotonicSeconds();
+  }
+  asio::post(strand_, [this, self = shared_from_this()] { connect(); });
+}
+
+void NetDriver::maybeRejoin() {
+  double delay = -1.0;
+  {
+    std::lock_guard lock(mutex_);
+    const double hint = session_->retryAfter();
+    if (stopping_ || session_->state() != SessionState::kClosed || hint <= 0.0) return;
+    delay = backoff_.nextDelay(hint);
+    if (delay < 0.0) {
+      spdlog::warn("'{}': the join was refused {} times in a row; giving up: {}", settings_.name,
+                   backoff_.attempts(), session_->error());
+      return;
+    }
+    if (backoff_.attempts() == 1) {
+      spdlog::warn("'{}': {}; joining again in {:.2f} s (and backing off while refused)",
+                   settings_.name, session_->error(), delay);
+    } else {
+      spdlog::debug("'{}': refused again ({}); attempt {} in {:.2f} s", settings_.name,
+                    session_->error(), backoff_.attempts() + 1, delay);
+    }
+    session_ = std::make_unique<ClientSession>(settings_, cache_);
+    ++rejoins_;
+  }
+  retry_timer_.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(delay)));
+  retry_timer_.async_wait([this, self = shared_from_this()](const boost::system::error_code& ec) {
+    if (ec || stopping_) return;
+    connect();
   });
+}
+
+void NetDriver::connect() {
+  // A fresh connection: the previous one's handlers have all run (they were aborted when
+  // its sockets closed, before any retry delay ended).
+  closed_ = false;
+  connected_ = false;
+  writing_ = false;
+  close_after_write_ = false;
+  write_queue_.clear();
+  tcp_ = asio::ip::tcp::socket(strand_);
+  udp_ = asio::ip::udp::socket(strand_);
+  auto self = shared_from_this();
+  resolver_.async_resolve(
+      server_.host, std::to_string(server_.port),
+      [this, self](const boost::system::error_code& ec,
+                   asio::ip::tcp::resolver::results_type results) {
+        if (ec) {
+          fail("cannot resolve '" + server_.host + "': " + ec.message());
+          return;
+        }
+        asio::async_connect(
+            tcp_, results,
+            [this, self](const boost::system::error_code& cec,
+                         const asio::ip::tcp::endpoint& endpoint) {
+              if (cec) {
+                fail("cannot connect to " + server_.host + ":" + std::to_string(server_.port) +
+                     ": " + cec.message());
+                return;
+              }
+              boost::system::error_code e;
+              tcp_.set_option(asio::ip::tcp::no_delay(true), e);
+              // UDP to the same address and port, connected (only its datagrams arrive).
+              const asio::ip::udp::endpoint udp_ep(endpoint.address(), endpoint.port());
+              udp_.open(udp_ep.protocol(), e);
+              if (!e) udp_.connect(udp_ep, e);
+              if (e) {
+                fail("cannot open UDP to " + udp_ep.address().to_string() + ": " + e.message());
+                return;
+              }
+              connected_ = true;
+              {
+                std::lock_guard lock(mutex_);
+                session_->start(monotonicSeconds());
+              }
+              flush();
+              readStream();
+              readDatagram();
+              armTimer();
+            });
+      });
 }
 
 void NetDriver::stop(const std::string& reason) {
   auto self = shared_from_this();
   asio::post(strand_, [this, self, reason] {
+    stopping_ = true;
+    retry_timer_.cancel();
     {
       std::lock_guard lock(mutex_);
-      session_.leave(reason);
+      session_->leave(reason);
     }
     if (!connected_) {
       resolver_.cancel();
@@ -133,7 +197,7 @@ bool NetDriver::sendPosture(const Posture& posture) {
   bool sent = false;
   {
     std::lock_guard lock(mutex_);
-    sent = session_.sendPosture(posture, monotonicSeconds());
+    sent = session_->sendPosture(posture, monotonicSeconds());
   }
   if (sent) asio::post(strand_, [self = shared_from_this()] { self->flush(); });
   return sent;
@@ -143,7 +207,7 @@ bool NetDriver::requestBall() {
   bool sent = false;
   {
     std::lock_guard lock(mutex_);
-    sent = session_.requestBall();
+    sent = session_->requestBall();
   }
   if (sent) asio::post(strand_, [self = shared_from_this()] { self->flush(); });
   return sent;
@@ -151,18 +215,18 @@ bool NetDriver::requestBall() {
 
 SessionState NetDriver::state() const {
   std::lock_guard lock(mutex_);
-  return session_.state();
+  return session_->state();
 }
 
 std::string NetDriver::error() const {
   std::lock_guard lock(mutex_);
-  return session_.error();
+  return session_->error();
 }
 
 void NetDriver::fail(const std::string& reason) {
   {
     std::lock_guard lock(mutex_);
-    session_.onDisconnected(reason, monotonicSeconds());
+    session_->onDisconnected(reason, monotonicSeconds());
   }
   closeSockets();
 }
@@ -175,6 +239,7 @@ void NetDriver::closeSockets() {
   tcp_.shutdown(asio::ip::tcp::socket::shutdown_both, ignored);
   tcp_.close(ignored);
   udp_.close(ignored);
+  maybeRejoin();
 }
 
 void NetDriver::flush() {
@@ -185,7 +250,7 @@ void NetDriver::flush() {
   bool close = false;
   {
     std::lock_guard lock(mutex_);
-    SessionOutbox& out = session_.outbox();
+    SessionOutbox& out = session_->outbox();
     stream.swap(out.stream);
     datagrams.swap(out.datagrams);
     close = out.close;
@@ -233,7 +298,7 @@ void NetDriver::readStream() {
         }
         {
           std::lock_guard lock(mutex_);
-          session_.onStreamBytes(std::span(read_buffer_.data(), n), monotonicSeconds());
+          session_->onStreamBytes(std::span(read_buffer_.data(), n), monotonicSeconds());
         }
         flush();
         readStream();
@@ -247,7 +312,7 @@ void NetDriver::readDatagram() {
         if (closed_) return;
         if (!ec) {
           std::lock_guard lock(mutex_);
-          session_.onDatagram(std::span(datagram_buffer_.data(), n), monotonicSeconds());
+          session_->onDatagram(std::span(datagram_buffer_.data(), n), monotonicSeconds());
         }
         // Errors such as ICMP port unreachable are transient on UDP: keep receiving.
         readDatagram();
@@ -260,7 +325,12 @@ void NetDriver::armTimer() {
     if (ec || closed_) return;
     {
       std::lock_guard lock(mutex_);
-      session_.update(monotonicSeconds());
+      const double now = monotonicSeconds();
+      session_->update(now);
+      if (live_after_s_ < 0.0 && session_->state() == SessionState::kLive) {
+        live_after_s_ = now - started_at_;
+        backoff_.reset();
+      }
     }
     flush();
     armTimer();

@@ -5,6 +5,12 @@
 // driver's strand; the public calls are thread-safe (a mutex guards the session), so a
 // source thread can send postures and the render thread can sample remote ones while
 // the network thread runs.
+//
+// A join the server refuses for a transient reason (ClientSession::retryAfter() > 0:
+// SERVER_FULL, a timed-out upload, no Welcome in time) is tried again on a new
+// connection after a JoinBackoff delay, with the same settings; the first refusal's
+// reason is logged at warn, later ones at debug. Meanwhile state() is kJoining. After
+// BackoffSettings::max_attempts refusals in a row the session stays closed.
 #pragma once
 
 #include <chrono>
@@ -18,6 +24,7 @@
 
 #include "client/net/asio.hpp"
 #include "client/net/client_session.hpp"
+#include "client/net/join_backoff.hpp"
 
 namespace vistel::net {
 
@@ -38,7 +45,8 @@ class NetDriver : public std::enable_shared_from_this<NetDriver> {
   // io is not owned and may be shared by many drivers (bots); run it on any threads.
   static std::shared_ptr<NetDriver> create(asio::io_context& io, ServerAddress server,
                                            SessionSettings settings,
-                                           std::shared_ptr<AvatarCache> cache);
+                                           std::shared_ptr<AvatarCache> cache,
+                                           const BackoffSettings& backoff = {});
   ~NetDriver();
 
   // Resolves, connects, joins (asynchronously). Then the session runs by itself.
@@ -57,12 +65,20 @@ class NetDriver : public std::enable_shared_from_this<NetDriver> {
   template <typename F>
   auto withSession(F&& f) const {
     std::lock_guard lock(mutex_);
-    return f(static_cast<const ClientSession&>(session_), monotonicSeconds());
+    return f(static_cast<const ClientSession&>(*session_), monotonicSeconds());
   }
+  // Joins refused and tried again so far, and the seconds from start() to the first
+  // kLive (negative until then).
+  int rejoins() const;
+  double secondsToLive() const;
 
  private:
   NetDriver(asio::io_context& io, ServerAddress server, SessionSettings settings,
-            std::shared_ptr<AvatarCache> cache);
+            std::shared_ptr<AvatarCache> cache, const BackoffSettings& backoff);
+  // Resolves and connects (strand), then starts the session.
+  void connect();
+  // The session closed: another join after a backoff when the refusal was transient.
+  void maybeRejoin();
   // Under the lock: takes the session's outbox; then (strand) writes it out.
   void flush();
   void writeStream();
@@ -80,8 +96,13 @@ class NetDriver : public std::enable_shared_from_this<NetDriver> {
   asio::ip::udp::socket udp_;
   asio::steady_timer timer_;
 
-  mutable std::mutex mutex_;  // session_
-  ClientSession session_;
+  mutable std::mutex mutex_;  // session_, rejoins_, live_after_s_
+  SessionSettings settings_;
+  std::shared_ptr<AvatarCache> cache_;
+  std::unique_ptr<ClientSession> session_;
+  int rejoins_ = 0;
+  double started_at_ = 0.0;
+  double live_after_s_ = -1.0;
 
   // Strand only.
   std::deque<std::vector<std::uint8_t>> write_queue_;
@@ -89,6 +110,9 @@ class NetDriver : public std::enable_shared_from_this<NetDriver> {
   bool close_after_write_ = false;
   bool closed_ = false;
   bool connected_ = false;
+  bool stopping_ = false;
+  JoinBackoff backoff_;
+  asio::steady_timer retry_timer_;
   std::vector<std::uint8_t> read_buffer_;
   std::vector<std::uint8_t> datagram_buffer_;
 };

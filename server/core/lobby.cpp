@@ -172,7 +172,7 @@ void Lobby::handleMessage(ConnId conn, Connection& c, std::span<const std::uint8
       if (!joined) break;
       spdlog::info("lobby: member {:#x} leaves: {}", c.member.value,
                    msg.leave().reason().empty() ? "no reason given" : msg.leave().reason());
-      endUpload(c);
+      endUpload(conn, c, now, fx);
       removeMember(c.member, "left", fx);
       connections_.erase(conn);
       fx.closes.push_back(conn);
@@ -249,23 +249,26 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
     }
   }
   if (static_cast<int>(members_.size()) >= config_.max_members) {
-    reject(conn, control::ErrorReply::SERVER_FULL, "the server is full", now, fx);
+    reject(conn, control::ErrorReply::SERVER_FULL, "the server is full", now, fx, {}, 5.0f);
     return;
   }
-  // An upload reserves its offered size against the server's total.
-  if (stored == nullptr &&
+  // An upload reserves its offered size against the server's total; a join whose avatar
+  // is being uploaded already waits for that upload instead.
+  const bool wait_for_upload = stored == nullptr && uploader_of_.count(join.avatar_hash()) > 0;
+  if (stored == nullptr && !wait_for_upload &&
       upload_bytes_in_flight_ + join.avatar_size() > config_.max_upload_bytes_total) {
     reject(conn, control::ErrorReply::SERVER_FULL,
            fmt::format("too many avatar uploads in progress ({} of {} bytes reserved); try "
                        "again later",
                        upload_bytes_in_flight_, config_.max_upload_bytes_total),
-           now, fx, "upload capacity");
+           now, fx, "upload capacity", 1.0f);
     return;
   }
   if (room == nullptr) {
     const std::uint32_t rid = room_ids_.allocate();
     if (rid == 0) {
-      reject(conn, control::ErrorReply::SERVER_FULL, "no more rooms on this server", now, fx);
+      reject(conn, control::ErrorReply::SERVER_FULL, "no more rooms on this server", now, fx, {},
+             5.0f);
       return;
     }
     RoomRecord& r = rooms_[rid];
@@ -289,7 +292,7 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
   // Create the member: id, key, seat, avatar state.
   const std::uint32_t mid = member_ids_.allocate();
   if (mid == 0) {
-    reject(conn, control::ErrorReply::SERVER_FULL, "the server is full", now, fx);
+    reject(conn, control::ErrorReply::SERVER_FULL, "the server is full", now, fx, {}, 5.0f);
     return;
   }
   Member& m = members_[mid];
@@ -307,10 +310,8 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
     m.avatar_ready = true;
     m.joint_count = stored->joint_count;
     store_.addRef(m.avatar_hash);
-  } else {
-    c.upload_reserved = m.avatar_size;
-    c.upload_progress_at = now;
-    upload_bytes_in_flight_ += c.upload_reserved;
+  } else if (!wait_for_upload) {
+    beginUpload(conn, c, m.avatar_hash, m.avatar_size, now);
   }
   room->members.push_back(m.id);
   c.member = m.id;
@@ -321,7 +322,7 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
   add.member = m.id;
   add.key = m.key;
   add.joint_count = m.joint_count;
-  add.seat = seatPlacement(m.seat, config_.seat_radius_m);
+  add.seat = seatPlacement(m.seat, config_.seat_layout);
   if (stored != nullptr) add.collision = stored->collision;
   fx.room_commands.push_back(add);
 
@@ -334,14 +335,17 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
   w.set_tick_rate_hz(config_.tick_rate_hz);
   w.set_server_time(now);
   w.set_room(room->name);
-  w.set_upload_avatar(!m.avatar_ready);
+  w.set_upload_avatar(!m.avatar_ready && !wait_for_upload);
+  w.set_avatar_pending(wait_for_upload);
   w.set_max_chunk_bytes(static_cast<std::uint32_t>(config_.avatar_chunk_bytes));
   w.set_max_avatar_bytes(config_.max_avatar_bytes);
   w.set_max_datagram_bytes(static_cast<std::uint32_t>(wire::kMaxDatagramBytes));
   send(conn, msg, fx);
   spdlog::info("lobby: '{}' joined room '{}' as member {:#x} (seat {}, avatar {}{})", m.name,
                room->name, m.id.value, m.seat, m.avatar_hash.substr(0, 12),
-               m.avatar_ready ? "" : ", upload requested");
+               m.avatar_ready    ? ""
+               : wait_for_upload ? ", waiting for its upload by another member"
+                                 : ", upload requested");
   sendRoster(*room, fx);
 }
 
@@ -377,13 +381,13 @@ void Lobby::handleChunk(ConnId conn, Connection& c, const control::AvatarChunk& 
   const std::string hash = m->avatar_hash;
   Status added =
       store_.add(hash, std::move(c.upload), fmt::format("avatar upload from '{}'", m->name));
-  endUpload(c);
   if (!added) {
     reject(conn, control::ErrorReply::AVATAR_REJECTED, added.error().message, now, fx);
     return;
   }
   spdlog::info("lobby: avatar {} uploaded by '{}' ({} bytes)", hash.substr(0, 12), m->name,
                m->avatar_size);
+  endUpload(conn, c, now, fx);
   avatarBecameReady(hash, fx);
 }
 
@@ -396,9 +400,10 @@ void Lobby::avatarBecameReady(const std::string& hash, Effects& fx) {
     m.avatar_ready = true;
     m.joint_count = stored->joint_count;
     store_.addRef(hash);
-    // A member still uploading the same file need not finish.
+    // A member still uploading the same file need not finish (nor hand it over: the
+    // store holds the file now).
     if (auto conn = connections_.find(m.conn); conn != connections_.end()) {
-      endUpload(conn->second);
+      endUpload(m.conn, conn->second, 0.0, fx);
     }
     RoomCommand cmd;
     cmd.kind = RoomCommand::Kind::kSetAvatar;
@@ -441,10 +446,52 @@ void Lobby::handleRequest(ConnId conn, const control::AvatarRequest& request, do
   }
 }
 
-void Lobby::endUpload(Connection& c) {
+void Lobby::beginUpload(ConnId conn, Connection& c, const std::string& hash, std::uint64_t size,
+                        double now) {
+  c.upload_reserved = size;
+  c.upload_hash = hash;
+  c.upload_progress_at = now;
+  c.upload.clear();
+  upload_bytes_in_flight_ += size;
+  uploader_of_[hash] = conn;
+}
+
+void Lobby::endUpload(ConnId conn, Connection& c, double now, Effects& fx) {
   upload_bytes_in_flight_ -= std::min(upload_bytes_in_flight_, c.upload_reserved);
   c.upload_reserved = 0;
   c.upload = {};  // gives the memory back
+  const std::string hash = std::move(c.upload_hash);
+  c.upload_hash.clear();
+  auto it = uploader_of_.find(hash);
+  if (hash.empty() || it == uploader_of_.end() || it->second != conn) return;
+  uploader_of_.erase(it);
+  if (store_.find(hash) != nullptr) return;  // complete: the waiting members are ready
+
+  // The upload failed or its member left: the longest-waiting member with the same
+  // avatar (lowest id among those not ready) takes it over.
+  Member* next = nullptr;
+  for (auto& [id, m] : members_) {
+    if (m.avatar_ready || m.avatar_hash != hash || m.conn == conn) continue;
+    if (!connections_.count(m.conn)) continue;
+    if (next == nullptr || m.id.value < next->id.value) next = &m;
+  }
+  if (next == nullptr) return;
+  Connection& nc = connections_.at(next->conn);
+  if (upload_bytes_in_flight_ + next->avatar_size > config_.max_upload_bytes_total) {
+    reject(next->conn, control::ErrorReply::SERVER_FULL,
+           "the avatar upload this join waited for failed, and the server has no upload "
+           "capacity left; try again later",
+           now, fx, "upload capacity", 1.0f);
+    return;
+  }
+  beginUpload(next->conn, nc, hash, next->avatar_size, now);
+  spdlog::info("lobby: '{}' (member {:#x}) takes over the upload of avatar {}", next->name,
+               next->id.value, hash.substr(0, 12));
+  control::ServerMessage msg;
+  msg.mutable_upload_avatar()->set_hash(hash);
+  msg.mutable_upload_avatar()->set_max_chunk_bytes(
+      static_cast<std::uint32_t>(config_.avatar_chunk_bytes));
+  send(next->conn, msg, fx);
 }
 
 void Lobby::handleSpawn(Connection& c, const control::SpawnProp& spawn, double now, Effects& fx) {
@@ -484,7 +531,7 @@ void Lobby::handleSpawn(Connection& c, const control::SpawnProp& spawn, double n
     room.props.erase(oldest);
   }
   // Above the member's head (the room knows its posture); the seat's column as fallback.
-  const SeatPlacement seat = seatPlacement(m->seat, config_.seat_radius_m);
+  const SeatPlacement seat = seatPlacement(m->seat, config_.seat_layout);
   const glm::vec3 fallback(seat.x, 2.3f, seat.z);
   if (!spawnProp(room, config_.spawn_ball, m->id, fallback, glm::vec3(0.0f), fx)) {
     drops_.drop(now, "no free prop id",
@@ -562,10 +609,10 @@ void Lobby::onHello(std::span<const std::uint8_t> datagram, const wire::Endpoint
   wire::write(ack, out.bytes);
 }
 
-void Lobby::onDisconnect(ConnId conn, double /*now*/, Effects& fx) {
+void Lobby::onDisconnect(ConnId conn, double now, Effects& fx) {
   auto it = connections_.find(conn);
   if (it == connections_.end()) return;
-  endUpload(it->second);
+  endUpload(conn, it->second, now, fx);
   if (it->second.member.value != 0) removeMember(it->second.member, "disconnected", fx);
   connections_.erase(it);
 }
@@ -594,7 +641,7 @@ void Lobby::update(double now, Effects& fx) {
     reject(conn, control::ErrorReply::TIMEOUT,
            fmt::format("avatar upload stalled (no chunk for {:.0f} s)",
                        config_.upload_stall_timeout_s),
-           now, fx, "upload stalled");
+           now, fx, "upload stalled", 1.0f);
   }
 }
 
@@ -607,7 +654,7 @@ void Lobby::shutdown(double now, Effects& fx) {
 }
 
 void Lobby::reject(ConnId conn, control::ErrorReply::Code code, const std::string& message,
-                   double now, Effects& fx, std::string_view reason) {
+                   double now, Effects& fx, std::string_view reason, float retry_after_s) {
   auto it = connections_.find(conn);
   if (it == connections_.end()) return;
   const std::string who = it->second.member.value != 0
@@ -623,10 +670,16 @@ void Lobby::reject(ConnId conn, control::ErrorReply::Code code, const std::strin
   control::ServerMessage msg;
   msg.mutable_error()->set_code(code);
   msg.mutable_error()->set_message(message);
+  if (retry_after_s > 0.0f) msg.mutable_error()->set_retry_after_s(retry_after_s);
   send(conn, msg, fx);
   fx.closes.push_back(conn);
-  endUpload(it->second);
-  if (it->second.member.value != 0) removeMember(it->second.member, message, fx);
+  // The member goes first, so that a handed-over upload cannot pick it.
+  const MemberId member = it->second.member;
+  it->second.member = MemberId{};
+  if (member.value != 0) removeMember(member, message, fx);
+  if (auto again = connections_.find(conn); again != connections_.end()) {
+    endUpload(conn, again->second, now, fx);
+  }
   connections_.erase(conn);
 }
 
@@ -681,7 +734,7 @@ void Lobby::sendRoster(const RoomRecord& room, Effects& fx) {
     info.set_avatar_hash(m.avatar_hash);
     info.set_joint_count(static_cast<std::uint32_t>(m.joint_count));
     info.set_avatar_ready(m.avatar_ready);
-    const SeatPlacement seat = seatPlacement(m.seat, config_.seat_radius_m);
+    const SeatPlacement seat = seatPlacement(m.seat, config_.seat_layout);
     info.mutable_seat()->set_x(seat.x);
     info.mutable_seat()->set_z(seat.z);
     info.mutable_seat()->set_yaw(seat.yaw);

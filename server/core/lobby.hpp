@@ -8,6 +8,10 @@
 // connection is closed (logged with the reason); a bad hello is dropped (counted,
 // logged) and never answered. A hello is answered with fewer bytes than it carried.
 //
+// Concurrent joins with one avatar the server lacks share one upload: the first joiner
+// uploads, the others wait (Welcome.avatar_pending) and become ready with it; should the
+// upload fail, a waiting member takes it over (UploadAvatar).
+//
 // Limits against floods (ServerConfig [limits]): control messages per connection through
 // a token bucket (control_rate_hz sustained, control_burst at once; an AvatarRequest
 // costs one more token per MiB it makes the server send; avatar chunks of the offered
@@ -32,6 +36,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "common/scene/seat_layout.hpp"
 #include "common/wire/endpoint.hpp"
 #include "common/wire/framing.hpp"
 #include "control.pb.h"
@@ -40,7 +45,6 @@
 #include "server/core/effects.hpp"
 #include "server/core/handles.hpp"
 #include "server/core/rate_limit.hpp"
-#include "server/core/seat.hpp"
 #include "server/core/server_config.hpp"
 
 namespace vistel::server {
@@ -72,6 +76,8 @@ class Lobby {
   const DropLog& drops() const { return drops_; }
   // Bytes reserved by unfinished avatar uploads (all connections).
   std::uint64_t uploadBytesInFlight() const { return upload_bytes_in_flight_; }
+  // Avatar uploads in progress (one per hash).
+  int uploadsInProgress() const { return static_cast<int>(uploader_of_.size()); }
   // Props of a room (by name) in spawn order; empty for an unknown room.
   std::vector<PropId> propsOf(std::string_view room) const;
   // The room of a live member.
@@ -86,6 +92,7 @@ class Lobby {
     TokenBucket control;                // control message budget
     std::vector<std::uint8_t> upload;   // avatar bytes received so far
     std::uint64_t upload_reserved = 0;  // bytes counted in upload_bytes_in_flight_
+    std::string upload_hash;            // the avatar this connection uploads (or empty)
     double upload_progress_at = 0.0;    // last chunk (or the join)
   };
   struct Member {
@@ -127,15 +134,22 @@ class Lobby {
   // `requester`'s head, else at position) and records it. False when no id is free.
   bool spawnProp(RoomRecord& room, const PropSpec& spec, MemberId requester,
                  const glm::vec3& position, const glm::vec3& velocity, Effects& fx);
-  // Gives back a connection's upload reservation and buffer.
-  void endUpload(Connection& c);
+  // Reserves an upload of `hash` (`size` bytes) for a connection: it becomes the one
+  // uploader of that hash.
+  void beginUpload(ConnId conn, Connection& c, const std::string& hash, std::uint64_t size,
+                   double now);
+  // Gives back a connection's upload reservation and buffer. When it was uploading an
+  // avatar the store still lacks, a member waiting for the same file takes the upload over
+  // (UploadAvatar), or is refused with SERVER_FULL when the capacity is gone.
+  void endUpload(ConnId conn, Connection& c, double now, Effects& fx);
   // Every member waiting for this hash becomes ready (their rooms learn the joint count
   // and get a new roster).
   void avatarBecameReady(const std::string& hash, Effects& fx);
   // Sends an ErrorReply, closes the connection and removes its member (logged and counted
   // under `reason`, by default the code's name).
+  // retry_after_s > 0 marks the refusal transient (ErrorReply.retry_after_s).
   void reject(ConnId conn, control::ErrorReply::Code code, const std::string& message, double now,
-              Effects& fx, std::string_view reason = {});
+              Effects& fx, std::string_view reason = {}, float retry_after_s = 0.0f);
   void removeMember(MemberId id, std::string_view reason, Effects& fx);
   void sendRoster(const RoomRecord& room, Effects& fx);
   void send(ConnId conn, const control::ServerMessage& message, Effects& fx);
@@ -153,6 +167,8 @@ class Lobby {
   std::unordered_map<wire::Endpoint, std::uint32_t, wire::EndpointHash> member_by_endpoint_;
   AvatarStore store_;
   std::uint64_t upload_bytes_in_flight_ = 0;
+  // The one connection uploading each avatar hash; later joins with that hash wait for it.
+  std::unordered_map<std::string, ConnId> uploader_of_;
   DropLog drops_{"lobby"};
   std::uint64_t seed_;
   std::mt19937_64 rng_;
