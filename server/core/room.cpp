@@ -11,6 +11,9 @@ RoomSettings roomSettings(const ServerConfig& config) {
   RoomSettings s;
   s.tick_rate_hz = config.tick_rate_hz;
   s.member_timeout_s = config.member_timeout_s;
+  s.forward_interval_s = config.forward_interval_s;
+  s.near_members = config.interest_near_members;
+  s.max_rate_divisor = config.interest_max_rate_divisor;
   s.world.gravity_mps2 = config.gravity_mps2;
   s.world.floor_height_m = config.floor_height_m;
   s.world.extent_m = config.world_extent_m;
@@ -45,15 +48,18 @@ void Room::apply(const RoomCommand& c, double now) {
       m.key = c.key;
       m.joint_count = c.joint_count;
       m.last_heard = now;
+      m.seat = glm::vec2(c.seat.x, c.seat.z);
       m.record_bytes.reserve(
           static_cast<std::size_t>(wire::postureRecordBytes(wire::kMaxWireJoints)));
       members_.push_back(std::move(m));
+      interest_dirty_ = true;
       world_.addMember(c.member, c.seat, c.collision);
       break;
     }
     case RoomCommand::Kind::kRemoveMember:
       std::erase_if(members_, [&](const Member& m) { return m.id == c.member; });
       world_.removeMember(c.member);
+      interest_dirty_ = true;
       break;
     case RoomCommand::Kind::kBindEndpoint:
       if (Member* m = find(c.member.value)) {
@@ -66,6 +72,7 @@ void Room::apply(const RoomCommand& c, double now) {
       if (Member* m = find(c.member.value)) {
         m->joint_count = c.joint_count;
         m->has_posture = false;
+        m->fresh = false;
         world_.setModel(c.member, c.collision);
       }
       break;
@@ -134,7 +141,7 @@ void Room::onDatagram(std::span<const std::uint8_t> datagram, const wire::Endpoi
 }
 
 void Room::onPosture(std::span<const std::uint8_t> datagram, const wire::Endpoint& from, double now,
-                     Effects& /*fx*/) {
+                     Effects& fx) {
   // Decode the whole packet (range-checked, exact length).
   wire::PosturePacket& p = scratch_posture_;
   if (!wire::read(datagram, p)) {
@@ -173,8 +180,17 @@ void Room::onPosture(std::span<const std::uint8_t> datagram, const wire::Endpoin
   m->record_bytes.assign(record.begin(), record.end());
   m->sequence = p.record.sequence;
   m->has_posture = true;
+  m->fresh = true;
+  ++m->accepted;
   world_.setPosture(m->id, p.record);
   ++postures_accepted_;
+
+  // On to the others: now when the last batch is long enough ago, else with the next.
+  if (!forward_pending_) {
+    forward_pending_ = true;
+    next_forward_ = std::max(now, last_forward_ + settings_.forward_interval_s);
+  }
+  if (now >= next_forward_) forward(now, fx);
 }
 
 void Room::onPing(std::span<const std::uint8_t> datagram, const wire::Endpoint& from, double now,
@@ -199,7 +215,14 @@ void Room::onPing(std::span<const std::uint8_t> datagram, const wire::Endpoint& 
   wire::write(pong, out.bytes);
 }
 
+double Room::nextWakeTime() const {
+  return forward_pending_ ? std::min(next_tick_, next_forward_) : next_tick_;
+}
+
 void Room::update(double now, Effects& fx) {
+  ticked_ = false;
+  if (forward_pending_ && now >= next_forward_) forward(now, fx);
+
   // Timeouts: members silent too long are reported once; the lobby removes them.
   for (Member& m : members_) {
     if (!m.timeout_reported && now - m.last_heard > settings_.member_timeout_s) {
@@ -212,43 +235,85 @@ void Room::update(double now, Effects& fx) {
 
   // Tick: step the world and send one snapshot round when due; missed ticks are skipped.
   if (now < next_tick_) return;
+  ticked_ = true;
   ++tick_;
   world_.step(last_tick_time_ < 0.0 ? tick_interval_ : now - last_tick_time_);
   last_tick_time_ = now;
-  sendSnapshots(now, fx);
+  sendWorld(now, fx);
   next_tick_ += tick_interval_;
   if (next_tick_ <= now) next_tick_ = now + tick_interval_;
 }
 
-void Room::sendSnapshots(double now, Effects& fx) {
+void Room::updateInterest() {
+  const std::size_t n = members_.size();
+  interest_.assign(n * n, 0);
+  const int near = std::max(1, settings_.near_members);
+  const int max_divisor = std::clamp(settings_.max_rate_divisor, 1, 255);
+  for (std::size_t to = 0; to < n; ++to) {
+    // The others by distance from this seat (ties by room order), ranked.
+    scratch_order_.clear();
+    for (std::size_t from = 0; from < n; ++from) {
+      if (from == to) continue;
+      scratch_order_.emplace_back(glm::distance(members_[to].seat, members_[from].seat),
+                                  static_cast<int>(from));
+    }
+    std::sort(scratch_order_.begin(), scratch_order_.end());
+    for (std::size_t rank = 0; rank < scratch_order_.size(); ++rank) {
+      const int divisor = std::min(max_divisor, 1 + static_cast<int>(rank) / near);
+      interest_[to * n + static_cast<std::size_t>(scratch_order_[rank].second)] =
+          static_cast<std::uint8_t>(divisor);
+    }
+  }
+  interest_dirty_ = false;
+}
+
+void Room::forward(double now, Effects& fx) {
+  if (interest_dirty_) updateInterest();
+  const std::size_t n = members_.size();
+  wire::SnapshotHeader header;
+  header.tick = tick_;
+  header.server_time = now;
+  for (std::size_t t = 0; t < n; ++t) {
+    const Member& to = members_[t];
+    if (!to.bound) continue;
+    // The fresh records this member hears, in room order, packed into as few datagrams
+    // as fit (entries only: no world part).
+    OutDatagram* out = nullptr;
+    int count = 0;
+    for (std::size_t f = 0; f < n; ++f) {
+      const Member& from = members_[f];
+      const std::uint8_t divisor = interest_[t * n + f];
+      if (!from.fresh || divisor == 0 || from.accepted % divisor != 0) continue;
+      const std::size_t entry = wire::kSnapshotEntryOverhead + from.record_bytes.size();
+      if (out != nullptr && (out->bytes.size() + entry > wire::kMaxDatagramBytes || count == 255)) {
+        wire::finishSnapshot(static_cast<std::uint8_t>(count), out->bytes);
+        out = nullptr;
+      }
+      if (out == nullptr) {
+        out = &fx.datagrams.emplace_back();
+        out->to = to.endpoint;
+        out->bytes.reserve(wire::kMaxDatagramBytes);
+        wire::beginSnapshot(header, out->bytes);
+        count = 0;
+      }
+      wire::appendSnapshotEntry(from.id.value, from.record_bytes, out->bytes);
+      ++count;
+      ++entries_forwarded_;
+    }
+    if (out != nullptr) wire::finishSnapshot(static_cast<std::uint8_t>(count), out->bytes);
+  }
+  for (Member& m : members_) m.fresh = false;
+  forward_pending_ = false;
+  last_forward_ = now;
+}
+
+void Room::sendWorld(double now, Effects& fx) {
   const auto parts = world_.parts();
   wire::SnapshotHeader header;
   header.tick = tick_;
   header.server_time = now;
   for (const Member& to : members_) {
     if (!to.bound) continue;
-    // The other members' records, in room order, packed into as few datagrams as fit:
-    // first beside each world part (the same bytes for everyone), then on their own.
-    std::size_t next = 0;
-    const auto nextEntry = [&]() -> const Member* {
-      while (next < members_.size()) {
-        const Member& from = members_[next];
-        if (!(from.id == to.id) && from.has_posture) return &from;
-        ++next;
-      }
-      return nullptr;
-    };
-    const auto fill = [&](std::vector<std::uint8_t>& packet, std::size_t reserved) {
-      int count = 0;
-      for (const Member* from = nextEntry(); from != nullptr && count < 255; from = nextEntry()) {
-        const std::size_t entry = wire::kSnapshotEntryOverhead + from->record_bytes.size();
-        if (packet.size() + entry + reserved > wire::kMaxDatagramBytes) break;
-        wire::appendSnapshotEntry(from->id.value, from->record_bytes, packet);
-        ++count;
-        ++next;
-      }
-      return count;
-    };
     for (std::size_t part = 0; part < parts.size(); ++part) {
       OutDatagram& out = fx.datagrams.emplace_back();
       out.to = to.endpoint;
@@ -257,19 +322,8 @@ void Room::sendSnapshots(double now, Effects& fx) {
       header.part = static_cast<std::uint8_t>(part);
       header.part_count = static_cast<std::uint8_t>(parts.size());
       wire::beginSnapshot(header, out.bytes);
-      const int count = fill(out.bytes, parts[part].bytes.size());
       wire::appendSnapshotWorld(parts[part].bytes, out.bytes);
-      wire::finishSnapshot(static_cast<std::uint8_t>(count), out.bytes);
-    }
-    header.prop_count = 0;
-    header.part = 0;
-    header.part_count = 0;
-    while (nextEntry() != nullptr) {
-      OutDatagram& out = fx.datagrams.emplace_back();
-      out.to = to.endpoint;
-      out.bytes.reserve(wire::kMaxDatagramBytes);
-      wire::beginSnapshot(header, out.bytes);
-      wire::finishSnapshot(static_cast<std::uint8_t>(fill(out.bytes, 0)), out.bytes);
+      wire::finishSnapshot(0, out.bytes);
     }
   }
 }

@@ -1,14 +1,23 @@
 // A room's share of the session protocol: the UDP side of its members (latest posture,
-// clock pings), its collision world (RoomWorld: members' primitives, props, Step 1) and
-// the fixed-rate tick that steps the world and sends every member a snapshot of the
-// others' newest postures, the prop states and the interaction list (DESIGN.md §6,
+// clock pings), its collision world (RoomWorld: members' primitives, props, Step 1), the
+// forwarding of postures as they arrive, and the fixed-rate tick that steps the world and
+// sends every member the prop states and the interaction list (DESIGN.md §6,
 // proto/SESSION.md §3, proto/WIRE.md §3.6). Pure: fed (bytes, endpoint, now), it appends
 // to Effects; no sockets, no clocks, no threads (the shell runs each room on its own
 // strand). Membership and props come from the lobby as RoomCommands.
 //
-// Cost per tick: the world step (O(primitives) posing, stepBall per prop, Step 1) plus
-// the snapshots; no heap allocation once the room's buffers and the Effects' datagram
-// slots have grown to its size (reuse one Effects across ticks).
+// Forwarding: a posture accepted is sent on to the other members within
+// forward_interval_s (batched: every member gets the postures that arrived since the last
+// batch, packed into as few datagrams as fit), not at the next tick. Interest: a member
+// hears its near_members nearest others (by seat) at every posture; the next
+// near_members at every second, the next at every third, and the rest at every
+// max_rate_divisor-th, so a member's downlink grows with the log of the room's size up
+// to 3 * near_members others and by 1/max_rate_divisor per member past that.
+//
+// Cost per posture: O(members) to forward it; per tick, the world step (O(primitives)
+// posing, stepBall per prop, Step 1) plus one or more world datagrams per member; no
+// heap allocation once the room's buffers and the Effects' datagram slots have grown to
+// its size (reuse one Effects across calls).
 #pragma once
 
 #include <cstdint>
@@ -27,7 +36,10 @@ namespace vistel::server {
 
 struct RoomSettings {
   double tick_rate_hz = 60.0;
-  double member_timeout_s = 10.0;  // silence on UDP (from join, until the first packet)
+  double member_timeout_s = 10.0;     // silence on UDP (from join, until the first packet)
+  double forward_interval_s = 0.002;  // postures wait at most this long to be forwarded
+  int near_members = 16;              // heard at full rate (and the size of each rate band)
+  int max_rate_divisor = 4;           // the farthest are heard at 1 / this of their rate
   WorldSettings world;
 };
 
@@ -43,8 +55,10 @@ class Room {
   int memberCount() const { return static_cast<int>(members_.size()); }
   std::uint32_t tickCount() const { return tick_; }
   const DropLog& drops() const { return drops_; }
-  // Postures accepted into the room so far (all members).
+  // Postures accepted into the room so far (all members), and entries forwarded (one per
+  // posture and recipient).
   std::uint64_t posturesAccepted() const { return postures_accepted_; }
+  std::uint64_t entriesForwarded() const { return entries_forwarded_; }
 
   // Mirrors a lobby decision (add/remove/bind/set avatar); commands for other rooms or
   // unknown members are ignored.
@@ -57,14 +71,19 @@ class Room {
   void onDatagram(std::span<const std::uint8_t> datagram, const wire::Endpoint& from, double now,
                   Effects& fx);
 
-  // If a tick is due, sends each bound member the others' newest postures (as many
-  // datagrams of at most kMaxDatagramBytes as needed) and reports members silent for
-  // longer than the timeout (once each, in fx.timed_out). Missed ticks are skipped, not
-  // replayed. Call at least at the tick rate.
+  // Forwards the postures waiting when their batch is due; if a tick is due, steps the
+  // world and sends each bound member the world's datagrams (prop states, interaction
+  // list); reports members silent for longer than the timeout (once each, in
+  // fx.timed_out). Missed ticks are skipped, not replayed. Call at least at the tick
+  // rate, and at nextWakeTime().
   void update(double now, Effects& fx);
 
   // Server time of the next due tick, and of the last one (-1 before the first).
   double nextTickTime() const { return next_tick_; }
+  // When update() next has work: the next tick, or sooner a batch of postures to forward.
+  double nextWakeTime() const;
+  // Whether update() just ran a tick (for callers that time ticks).
+  bool ticked() const { return ticked_; }
   double lastTickTime() const { return last_tick_time_; }
 
   // The collision world as of the last tick.
@@ -76,8 +95,11 @@ class Room {
     std::uint64_t key = 0;
     bool bound = false;
     wire::Endpoint endpoint;
-    int joint_count = 0;  // 0 = avatar not ready: postures are refused
+    int joint_count = 0;   // 0 = avatar not ready: postures are refused
+    glm::vec2 seat{0.0f};  // where it stands (x, z), for interest
     bool has_posture = false;
+    bool fresh = false;                      // accepted since the last forwarding batch
+    std::uint32_t accepted = 0;              // postures accepted (decimates far recipients)
     std::uint16_t sequence = 0;              // of the stored posture
     std::vector<std::uint8_t> record_bytes;  // serialized newest posture record
     double last_heard = 0.0;
@@ -92,7 +114,11 @@ class Room {
   // Common checks of a client datagram's sender; logs and returns nullptr on failure.
   Member* authenticate(std::uint32_t member_id, std::uint64_t key, const wire::Endpoint& from,
                        double now, std::string_view what);
-  void sendSnapshots(double now, Effects& fx);
+  // Sends every member the fresh postures its interest lets through.
+  void forward(double now, Effects& fx);
+  void sendWorld(double now, Effects& fx);
+  // Rate divisors per (recipient, source) in members_ order, from the seats.
+  void updateInterest();
 
   RoomId id_;
   std::string name_;
@@ -105,6 +131,14 @@ class Room {
   std::vector<Member> members_;
   DropLog drops_;
   std::uint64_t postures_accepted_ = 0;
+  std::uint64_t entries_forwarded_ = 0;
+  bool forward_pending_ = false;
+  double next_forward_ = 0.0;
+  double last_forward_ = -1e300;
+  bool ticked_ = false;
+  bool interest_dirty_ = true;
+  std::vector<std::uint8_t> interest_;  // [recipient * n + source]: divisor (0 for self)
+  std::vector<std::pair<float, int>> scratch_order_;
   // Reused per datagram, so steady state allocates only the outgoing datagrams.
   wire::PosturePacket scratch_posture_;
 };

@@ -96,6 +96,8 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
   VISTEL_TRY(session.number("tick_rate_hz", c.tick_rate_hz, 1, 240));
   VISTEL_TRY(session.number("member_timeout_s", c.member_timeout_s, 0.1, 3600));
   VISTEL_TRY(session.number("join_timeout_s", c.join_timeout_s, 0.1, 3600));
+  VISTEL_TRY(session.number("forward_interval_s", c.forward_interval_s, 0, 0.1));
+  VISTEL_TRY(session.number("stats_interval_s", c.stats_interval_s, 0, 86400));
   VISTEL_TRY(session.checkUnknown());
 
   ConfigTable limits(root, "limits", source_name);
@@ -126,6 +128,8 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
   VISTEL_TRY(room.number("seat_radius_m", c.seat_layout.first_radius_m, 0.1, 100));
   VISTEL_TRY(room.number("seat_spacing_m", c.seat_layout.spacing_m, 0.1, 100));
   VISTEL_TRY(room.number("ring_gap_m", c.seat_layout.ring_gap_m, 0.1, 100));
+  VISTEL_TRY(room.number("near_members", c.interest_near_members, 1, 255));
+  VISTEL_TRY(room.number("far_rate_divisor", c.interest_max_rate_divisor, 1, 16));
   VISTEL_TRY(room.checkUnknown());
   if (Status layout = validateSeatLayout(c.seat_layout); !layout) {
     return fail("{}: [room] {}", source_name, layout.error().message);

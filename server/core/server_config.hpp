@@ -31,9 +31,11 @@ struct ServerConfig {
   std::uint16_t port = 7400;               // 0 = an ephemeral port (printed at start)
   int io_threads = 2;                      // Asio threads (rooms tick on their own strands)
   // [session]
-  double tick_rate_hz = 60.0;      // snapshot rate of every room
-  double member_timeout_s = 10.0;  // UDP silence after which a member is dropped
-  double join_timeout_s = 5.0;     // a connection must send Join within this
+  double tick_rate_hz = 60.0;         // snapshot rate of every room
+  double member_timeout_s = 10.0;     // UDP silence after which a member is dropped
+  double join_timeout_s = 5.0;        // a connection must send Join within this
+  double forward_interval_s = 0.002;  // postures wait at most this long to be forwarded
+  double stats_interval_s = 10.0;     // the server logs its load this often (0: never)
   // [limits]
   int max_rooms = 64;
   int max_members = 1024;  // over all rooms (<= 65535)
@@ -50,6 +52,8 @@ struct ServerConfig {
   // [room]
   SeatLayout seat_layout;  // rings of seats about the centre (seat_radius_m, seat_spacing_m,
                            // ring_gap_m)
+  int interest_near_members = 16;     // near_members: heard at every posture (and rate bands)
+  int interest_max_rate_divisor = 4;  // far_rate_divisor: the farthest at 1/this of the rate
   // [world]
   float gravity_mps2 = 9.81f;         // downwards (-Y)
   float floor_height_m = 0.0f;        // a rigid floor plane at this height

@@ -122,7 +122,7 @@ void ServerCore::shutdown(double now) {
 
 double ServerCore::nextWakeTime(double now) const {
   double t = now + 0.1;  // timeouts are checked at least this often
-  for (const auto& [id, room] : rooms_) t = std::min(t, room->nextTickTime());
+  for (const auto& [id, room] : rooms_) t = std::min(t, room->nextWakeTime());
   return t;
 }
 
