@@ -1,9 +1,10 @@
 // vistel-server: the session server (DESIGN.md §6).
 //   vistel-server [--port 7400] [--config config/server.toml] [--bind ADDRESS]
-//                 [--log-level LEVEL]
+//                 [--log-level LEVEL] [--stats-json FILE]
 // Prints "vistel-server listening on ADDRESS:PORT" on stdout once both sockets are
 // bound (port 0 picks a free one), logs to stderr, and shuts down cleanly on SIGINT or
-// SIGTERM (every client is told, sockets close, exit status 0).
+// SIGTERM (every client is told, sockets close, exit status 0). --stats-json writes the
+// server's load since the start (LoadStats::totalsJson) to FILE when it stops.
 #include <cstdio>
 #include <thread>
 #include <vector>
@@ -12,6 +13,7 @@
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
+#include "common/base/file.hpp"
 #include "server/core/server_config.hpp"
 #include "server/shell/asio.hpp"
 #include "server/shell/server_shell.hpp"
@@ -26,11 +28,14 @@ int main(int argc, char** argv) {
   int port = -1;
   std::string bind;
   std::string log_level;
+  std::string stats_json;
   app.add_option("--config", config_path, "server settings (TOML); built-in defaults if absent");
   app.add_option("--port", port, "TCP and UDP port (0: any free port; default from config: 7400)")
       ->check(CLI::Range(0, 65535));
   app.add_option("--bind", bind, "listen address (default from config: 127.0.0.1)");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error, off");
+  app.add_option("--stats-json", stats_json,
+                 "write the load (ticks, CPU, datagrams) as JSON to this file at shutdown");
   CLI11_PARSE(app, argc, argv);
 
   spdlog::set_default_logger(spdlog::stderr_color_mt("vistel-server"));
@@ -78,6 +83,12 @@ int main(int argc, char** argv) {
   for (int i = 1; i < config->io_threads; ++i) threads.emplace_back(run);
   run();
   for (std::thread& t : threads) t.join();
+  if (!stats_json.empty()) {
+    if (Status st = writeFileText(stats_json, shell.loadJson() + "\n"); !st) {
+      spdlog::error("--stats-json: {}", st.error().message);
+      return 1;
+    }
+  }
   spdlog::info("shut down cleanly");
   return 0;
 }

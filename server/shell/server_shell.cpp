@@ -63,6 +63,8 @@ struct ServerShell::RoomHost {
   Room room;   // its strand only
   Effects fx;  // its strand only; reused so that ticks allocate nothing once warm
   bool closed = false;
+  std::uint64_t timer_generation = 0;  // a wait that is not the newest does nothing
+  double armed_for = 0.0;              // server time the newest wait ends
 };
 
 ServerShell::ServerShell(asio::io_context& io, const ServerConfig& config)
@@ -72,6 +74,7 @@ ServerShell::ServerShell(asio::io_context& io, const ServerConfig& config)
       lobby_strand_(asio::make_strand(io)),
       acceptor_(lobby_strand_),
       lobby_timer_(lobby_strand_),
+      stats_timer_(lobby_strand_),
       lobby_(config, 0),
       udp_(io),
       udp_buffer_(65536) {}
@@ -116,8 +119,11 @@ Status ServerShell::start() {
     std::lock_guard lock(udp_mutex_);
     receiveDatagram();
   }
-  // The lobby's own timer: join timeouts.
-  asio::post(lobby_strand_, [this] { armLobbyTimer(); });
+  // The lobby's own timer: join timeouts; and the load report.
+  asio::post(lobby_strand_, [this] {
+    armLobbyTimer();
+    armStatsTimer();
+  });
   return {};
 }
 
@@ -137,6 +143,23 @@ void ServerShell::armLobbyTimer() {
       applyLobbyEffects(fx);
     });
     armLobbyTimer();
+  });
+}
+
+void ServerShell::armStatsTimer() {
+  if (config_.stats_interval_s <= 0.0) return;
+  stats_timer_.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(config_.stats_interval_s)));
+  stats_timer_.async_wait([this](const boost::system::error_code& ec) {
+    if (ec || stopping_) return;
+    load_.setPopulation(lobby_.roomCount(), lobby_.memberCount());
+    const std::string line = load_.report(now());
+    if (lobby_.memberCount() > 0) {
+      spdlog::info("{}", line);
+    } else {
+      spdlog::debug("{}", line);
+    }
+    armStatsTimer();
   });
 }
 
@@ -259,6 +282,7 @@ void ServerShell::applyLobbyEffects(Effects& fx) {
     if (it != sessions_.end()) write(it->second);
   }
   sendDatagrams(fx.datagrams);
+  load_.setPopulation(lobby_.roomCount(), lobby_.memberCount());
 
   // Room commands: create/close rooms, route, forward in order to each room's strand.
   for (RoomCommand& c : fx.room_commands) {
@@ -294,14 +318,25 @@ void ServerShell::applyLobbyEffects(Effects& fx) {
 void ServerShell::armRoomTimer(std::shared_ptr<RoomHost> host) {
   asio::post(host->strand, [this, host] {
     if (host->closed || stopping_) return;
-    const double wait = std::max(0.0, host->room.nextTickTime() - now());
+    // Until the room's next work (a tick, or a batch of postures to forward), at most
+    // 0.1 s (timeouts); a newer wait replaces this one.
+    const double t = now();
+    const double wait = std::min(0.1, std::max(0.0, host->room.nextWakeTime() - t));
+    const std::uint64_t generation = ++host->timer_generation;
+    host->armed_for = t + wait;
     host->timer.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-        std::chrono::duration<double>(std::min(wait, 0.1))));
-    host->timer.async_wait([this, host](const boost::system::error_code& ec) {
-      if (ec || host->closed || stopping_) return;
+        std::chrono::duration<double>(wait)));
+    host->timer.async_wait([this, host, generation](const boost::system::error_code& ec) {
+      if (ec || host->closed || stopping_ || generation != host->timer_generation) return;
       guarded("room tick", [&] {
+        const auto start = std::chrono::steady_clock::now();
         host->room.update(now(), host->fx);
         applyRoomEffects(host->fx);
+        if (host->room.ticked()) {
+          load_.addTick(
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+              host->room.memberCount());
+        }
       });
       armRoomTimer(host);
     });
@@ -331,7 +366,12 @@ void ServerShell::sendDatagrams(DatagramQueue& datagrams) {
   for (const OutDatagram& d : datagrams) {
     boost::system::error_code ec;
     udp_.send_to(asio::buffer(d.bytes), toAsio(d.to), 0, ec);
-    if (ec) spdlog::debug("send to {} failed: {}", d.to.toString(), ec.message());
+    if (ec) {
+      load_.addSendFailure();
+      spdlog::debug("send to {} failed: {}", d.to.toString(), ec.message());
+    } else {
+      load_.addSent(d.bytes.size());
+    }
   }
   datagrams.clear();
 }
@@ -342,6 +382,7 @@ void ServerShell::receiveDatagram() {
                           [this](const boost::system::error_code& ec, std::size_t n) {
                             if (ec == asio::error::operation_aborted || stopping_) return;
                             if (!ec) {
+                              load_.addReceived(n);
                               auto bytes = std::make_shared<std::vector<std::uint8_t>>(
                                   udp_buffer_.begin(), udp_buffer_.begin() + n);
                               guarded("datagram",
@@ -383,6 +424,11 @@ void ServerShell::onDatagram(std::shared_ptr<std::vector<std::uint8_t>> bytes,
           host->room.onDatagram(*bytes, from, now(), host->fx);
           applyRoomEffects(host->fx);
         });
+        // A posture left waiting for its batch: wake up for it.
+        if (host->room.nextWakeTime() < host->armed_for - 1e-4) {
+          host->armed_for = host->room.nextWakeTime();  // one re-arm per batch
+          armRoomTimer(host);
+        }
       });
       break;
     case DatagramRoute::Target::kDrop:
@@ -402,6 +448,7 @@ void ServerShell::stop() {
     boost::system::error_code ignored;
     acceptor_.close(ignored);
     lobby_timer_.cancel();
+    stats_timer_.cancel();
     // Tell everyone, then close (each session closes after its last write).
     Effects fx;
     guarded("shutdown", [&] { lobby_.shutdown(now(), fx); });

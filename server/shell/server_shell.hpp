@@ -5,6 +5,10 @@
 // datagrams are routed by member id to their room's strand.
 //
 // Every handler catches exceptions at its top: one bad peer cannot take the server down.
+//
+// Load: every room tick's work (world step and sends) is timed into LoadStats, with the
+// datagrams and bytes moved; every [session] stats_interval_s the lobby strand logs a
+// line of it (rooms, members, tick p50/p99, CPU per member-tick).
 #pragma once
 
 #include <atomic>
@@ -22,6 +26,7 @@
 #include "server/core/room.hpp"
 #include "server/core/server_core.hpp"
 #include "server/shell/asio.hpp"
+#include "server/shell/load_stats.hpp"
 
 namespace vistel::server {
 
@@ -36,6 +41,8 @@ class ServerShell {
   Status start();
   // "ADDRESS:PORT" actually bound (after start()).
   std::string localAddress() const;
+  // The load since the start, as JSON (LoadStats::totalsJson).
+  std::string loadJson() const { return load_.totalsJson(now()); }
   std::uint16_t localPort() const { return port_; }
 
   // Graceful stop: every connection gets a shutting-down error, sockets and timers
@@ -49,6 +56,7 @@ class ServerShell {
 
   double now() const;
   void armLobbyTimer();
+  void armStatsTimer();
   void accept();
   void read(std::shared_ptr<TcpSession> s);
   void write(std::shared_ptr<TcpSession> s);
@@ -67,6 +75,8 @@ class ServerShell {
   Strand lobby_strand_;
   asio::ip::tcp::acceptor acceptor_;
   asio::steady_timer lobby_timer_;
+  asio::steady_timer stats_timer_;
+  LoadStats load_;
   Lobby lobby_;                                                       // lobby strand only
   std::unordered_map<ConnId, std::shared_ptr<TcpSession>> sessions_;  // lobby strand only
   ConnId next_conn_ = 1;
