@@ -2,6 +2,7 @@
 #include "common/deform/interactions.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <tuple>
 
 namespace vistel {
@@ -63,60 +64,118 @@ void finalizeInteractions(InteractionList& list, int body_count) {
   }
 }
 
+namespace {
+
+bool boxesMeet(const Bounds& a, const Bounds& b) {
+  return a.min.x <= b.max.x && b.min.x <= a.max.x && a.min.y <= b.max.y && b.min.y <= a.max.y &&
+         a.min.z <= b.max.z && b.min.z <= a.max.z;
+}
+
+// The collidable primitives of a body whose boxes meet `region`.
+void primitivesIn(const PosedPrimitives& posed, const Bounds& region,
+                  std::vector<std::uint16_t>& out) {
+  out.clear();
+  for (std::size_t i = 0; i < posed.items.size(); ++i) {
+    const PosedPrimitive& p = posed.items[i];
+    if (p.collides && boxesMeet(p.bounds, region)) out.push_back(static_cast<std::uint16_t>(i));
+  }
+}
+
+}  // namespace
+
 void buildInteractions(std::span<const BodyView> bodies, InteractionScratch& s,
                        InteractionList& out) {
-  // Gather every collidable primitive's x interval.
-  s.items.clear();
-  for (std::size_t b = 0; b < bodies.size(); ++b) {
+  out.pairs.clear();
+  const std::size_t n = bodies.size();
+
+  // Each body's own pairs, and its box.
+  s.body_boxes.resize(n);
+  s.body_live.assign(n, 0);
+  for (std::size_t b = 0; b < n; ++b) {
     const PosedPrimitives& posed = *bodies[b].posed;
-    for (std::size_t i = 0; i < posed.items.size(); ++i) {
-      const PosedPrimitive& p = posed.items[i];
+    Bounds box{glm::vec3(std::numeric_limits<float>::max()),
+               glm::vec3(std::numeric_limits<float>::lowest())};
+    for (const PosedPrimitive& p : posed.items) {
       if (!p.collides) continue;
-      s.items.push_back({p.bounds.min.x, p.bounds.max.x, static_cast<std::uint16_t>(b),
-                         static_cast<std::uint16_t>(i)});
+      box.min = glm::min(box.min, p.bounds.min);
+      box.max = glm::max(box.max, p.bounds.max);
+      s.body_live[b] = 1;
+    }
+    s.body_boxes[b] = box;
+    const CombinationGraph* graph = bodies[b].graph;
+    if (graph == nullptr) continue;
+    const auto body = static_cast<std::uint16_t>(b);
+    for (const auto& cp : graph->collide_pairs) {
+      const PosedPrimitive& p = posed.items[cp[0]];
+      const PosedPrimitive& q = posed.items[cp[1]];
+      if (p.collides && q.collides && boundsOverlap(p, q)) {
+        out.pairs.push_back({body, cp[0], body, cp[1]});
+      }
     }
   }
-  // Keep last frame's order when the item set is unchanged (insertion sort is then
-  // nearly linear); otherwise sort afresh.
+
+  // Bodies by their boxes' min x: last frame's order when the set is the same (insertion
+  // sort is then nearly linear), else sorted afresh.
   const auto key_less = [&s](std::uint32_t x, std::uint32_t y) {
-    const float kx = s.items[x].min_x;
-    const float ky = s.items[y].min_x;
+    const float kx = s.body_boxes[x].min.x;
+    const float ky = s.body_boxes[y].min.x;
     return kx < ky || (kx == ky && x < y);
   };
-  if (s.order.size() != s.items.size()) {
-    s.order.resize(s.items.size());
-    for (std::size_t i = 0; i < s.order.size(); ++i) s.order[i] = static_cast<std::uint32_t>(i);
-    std::sort(s.order.begin(), s.order.end(), key_less);
+  std::size_t live = 0;
+  for (std::size_t b = 0; b < n; ++b) live += s.body_live[b];
+  bool same = s.body_order.size() == live;
+  for (std::size_t k = 0; same && k < s.body_order.size(); ++k) {
+    same = s.body_order[k] < n && s.body_live[s.body_order[k]] != 0;
+  }
+  if (!same) {
+    s.body_order.clear();
+    for (std::size_t b = 0; b < n; ++b) {
+      if (s.body_live[b] != 0) s.body_order.push_back(static_cast<std::uint32_t>(b));
+    }
+    std::sort(s.body_order.begin(), s.body_order.end(), key_less);
   } else {
-    for (std::size_t i = 1; i < s.order.size(); ++i) {
-      const std::uint32_t x = s.order[i];
+    for (std::size_t i = 1; i < s.body_order.size(); ++i) {
+      const std::uint32_t x = s.body_order[i];
       std::size_t j = i;
-      while (j > 0 && key_less(x, s.order[j - 1])) {
-        s.order[j] = s.order[j - 1];
+      while (j > 0 && key_less(x, s.body_order[j - 1])) {
+        s.body_order[j] = s.body_order[j - 1];
         --j;
       }
-      s.order[j] = x;
+      s.body_order[j] = x;
     }
   }
-  // Sweep: each item against the open intervals that reach its start.
-  out.pairs.clear();
+
+  // Sweep over the bodies; a pair whose boxes meet tests the primitives of each that lie
+  // in the common box against each other.
   s.active.clear();
-  for (const std::uint32_t idx : s.order) {
-    const auto& it = s.items[idx];
+  for (const std::uint32_t a : s.body_order) {
+    const Bounds& box_a = s.body_boxes[a];
     std::size_t keep = 0;
     for (std::size_t k = 0; k < s.active.size(); ++k) {
-      const auto& other = s.items[s.active[k]];
-      if (other.max_x < it.min_x) continue;  // closed for good
-      s.active[keep++] = s.active[k];
-      if (!allowed(bodies, it.body, it.prim, other.body, other.prim)) continue;
-      const PosedPrimitive& p = bodies[it.body].posed->items[it.prim];
-      const PosedPrimitive& q = bodies[other.body].posed->items[other.prim];
-      if (boundsOverlap(p, q)) out.pairs.push_back({it.body, it.prim, other.body, other.prim});
+      const std::uint32_t b = s.active[k];
+      const Bounds& box_b = s.body_boxes[b];
+      if (box_b.max.x < box_a.min.x) continue;  // closed for good
+      s.active[keep++] = b;
+      if (!boxesMeet(box_a, box_b)) continue;
+      const Bounds common{glm::max(box_a.min, box_b.min), glm::min(box_a.max, box_b.max)};
+      const PosedPrimitives& pa = *bodies[a].posed;
+      const PosedPrimitives& pb = *bodies[b].posed;
+      primitivesIn(pa, common, s.near_a);
+      if (s.near_a.empty()) continue;
+      primitivesIn(pb, common, s.near_b);
+      for (const std::uint16_t i : s.near_a) {
+        for (const std::uint16_t j : s.near_b) {
+          if (boundsOverlap(pa.items[i], pb.items[j])) {
+            out.pairs.push_back(
+                {static_cast<std::uint16_t>(a), i, static_cast<std::uint16_t>(b), j});
+          }
+        }
+      }
     }
     s.active.resize(keep);
-    s.active.push_back(idx);
+    s.active.push_back(a);
   }
-  finalizeInteractions(out, static_cast<int>(bodies.size()));
+  finalizeInteractions(out, static_cast<int>(n));
 }
 
 void buildInteractions(const CombinationGraph& graph, const PosedPrimitives& posed,

@@ -109,6 +109,43 @@ TEST(Interactions, SweepAndPruneMatchesAllPairs) {
   }
 }
 
+// A room: bodies in a row, neighbours' boxes overlapping at their edges, farther ones
+// apart, some drifting into each other; one body without a graph (a prop).
+TEST(Interactions, BodiesApartAndTouchingMatchAllPairs) {
+  std::mt19937 rng(29);
+  std::vector<RandomBody> bodies;
+  for (int b = 0; b < 12; ++b) bodies.push_back(randomBody(rng, 6 + b % 5));
+  InteractionScratch scratch;
+  InteractionList list;
+  std::normal_distribution<float> jitter(0.0f, 0.05f);
+  std::vector<glm::vec3> place(bodies.size());
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    place[b] = glm::vec3(1.1f * static_cast<float>(b % 6), 0.0f, b < 6 ? 0.0f : 1.3f);
+  }
+  std::size_t across = 0;
+  for (int frame = 0; frame < 30; ++frame) {
+    std::vector<BodyView> views;
+    for (std::size_t b = 0; b < bodies.size(); ++b) {
+      place[b] += glm::vec3(jitter(rng), 0.0f, jitter(rng));
+      std::vector<glm::mat4> xf(1, glm::translate(glm::mat4(1.0f), place[b]));
+      for (Primitive& p : bodies[b].set.items) p.bone = 0;
+      posePrimitives(bodies[b].set, xf, bodies[b].posed);
+      views.push_back({b == 5 ? nullptr : &bodies[b].graph, &bodies[b].posed});
+    }
+    buildInteractions(views, scratch, list);
+    std::set<std::tuple<int, int, int, int>> got;
+    for (const Interaction& i : list.pairs) {
+      got.insert({i.body_a, i.prim_a, i.body_b, i.prim_b});
+      if (i.body_a != i.body_b) ++across;
+    }
+    std::set<std::tuple<int, int, int, int>> expect = bruteForce(bodies);
+    std::erase_if(expect, [](const auto& t) { return std::get<0>(t) == 5 && std::get<2>(t) == 5; });
+    EXPECT_EQ(got, expect) << "frame " << frame;
+    EXPECT_EQ(got.size(), list.pairs.size()) << "no duplicates";
+  }
+  EXPECT_GT(across, 0u);  // some bodies did touch
+}
+
 TEST(Interactions, ValidationRejectsBadReceivedLists) {
   std::mt19937 rng(5);
   std::vector<RandomBody> bodies;
