@@ -342,6 +342,7 @@ void ClientSession::sendPing(double now) {
 
 void ClientSession::onDatagram(std::span<const std::uint8_t> datagram, double now) {
   if (state_ != SessionState::kHandshaking && state_ != SessionState::kLive) return;
+  stats_.datagram_bytes_received += datagram.size();
   const auto type = wire::peekPacketType(datagram);
   if (type == wire::PacketType::kHelloAck) {
     wire::HelloAckPacket ack;
@@ -427,6 +428,7 @@ void ClientSession::handleInteractionPart(const wire::Snapshot& snapshot) {
     pending_interactions_.tick = h.tick;
     pending_interactions_.server_time = h.server_time;
     pending_interactions_.truncated = false;
+    pending_interactions_.self_omitted = false;
     pending_interactions_.pairs.clear();
     pending_part_count_ = h.part_count;
     pending_parts_ = 0;
@@ -451,6 +453,7 @@ void ClientSession::handleInteractionPart(const wire::Snapshot& snapshot) {
     pending_interactions_.pairs.push_back({ref(p.body_a, p.prim_a), ref(p.body_b, p.prim_b)});
   }
   if ((x.flags & wire::kInteractionsTruncated) != 0) pending_interactions_.truncated = true;
+  if ((x.flags & wire::kInteractionsSelfOmitted) != 0) pending_interactions_.self_omitted = true;
 
   // All parts here: it becomes the newest list.
   const std::uint32_t all =
@@ -476,6 +479,7 @@ bool ClientSession::sendPosture(const Posture& posture, double now) {
   }
   wire::write(p, outbox_.datagrams.emplace_back());
   ++stats_.postures_sent;
+  stats_.posture_bytes_sent += outbox_.datagrams.back().size();
   return true;
 }
 
@@ -571,6 +575,23 @@ Status ClientSession::sceneInteractions(std::span<const BodyView> bodies, Intera
         {static_cast<std::uint16_t>(a), p.a.prim, static_cast<std::uint16_t>(b), p.b.prim});
   }
   if (dropped != nullptr) *dropped = left_out;
+  // Self-contact the server left out: each posed body's own, from the poses given here
+  // (the ones drawn).
+  if (interactions_.self_omitted) {
+    for (std::size_t b = 0; b < bodies.size(); ++b) {
+      const BodyView& body = bodies[b];
+      if (body.posed == nullptr || body.graph == nullptr) continue;
+      for (const auto& cp : body.graph->collide_pairs) {
+        if (std::max(cp[0], cp[1]) >= body.posed->items.size()) continue;  // refused below
+        const PosedPrimitive& p = body.posed->items[cp[0]];
+        const PosedPrimitive& q = body.posed->items[cp[1]];
+        if (p.collides && q.collides && boundsOverlap(p, q)) {
+          const auto i = static_cast<std::uint16_t>(b);
+          out.pairs.push_back({i, cp[0], i, cp[1]});
+        }
+      }
+    }
+  }
   // Canonical order, then the same checks a locally built list would pass.
   finalizeInteractions(out, static_cast<int>(bodies.size()));
   if (Status st = validateInteractions(out, bodies); !st) {

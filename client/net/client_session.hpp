@@ -121,6 +121,7 @@ struct ReceivedInteractions {
   std::uint32_t tick = 0;
   double server_time = 0.0;  // of the tick (the postures and prop states it was computed from)
   bool truncated = false;    // the server had more pairs than it sent (self-contact first)
+  bool self_omitted = false;  // only pairs between bodies: self-contact is computed here
   std::vector<ServerPair> pairs;
 };
 

@@ -25,8 +25,11 @@ inline constexpr int kPrimIndexBits = 12;                  // primitive index (<
 inline constexpr int kMaxSectionBodies = 255;              // members + props in one body table
 inline constexpr int kInteractionSectionHeader = 5;        // flags, m, q, then u16 count after ids
 inline constexpr std::uint8_t kInteractionsTruncated = 1;  // flags bit 0
-inline constexpr float kPropPositionUnit = 0.001f;         // metres per position unit
-inline constexpr float kPropVelocityUnit = 0.001f;         // m/s per velocity unit
+// flags bit 1: the section lists only pairs between bodies; each receiver computes the
+// self-contact pairs of the bodies it deforms from its own poses (WIRE.md §3.8).
+inline constexpr std::uint8_t kInteractionsSelfOmitted = 2;
+inline constexpr float kPropPositionUnit = 0.001f;  // metres per position unit
+inline constexpr float kPropVelocityUnit = 0.001f;  // m/s per velocity unit
 
 // One prop's state at the snapshot's tick (16 bytes). Room space: metres, +Y up.
 struct PropStateRecord {
@@ -102,7 +105,7 @@ bool serialize(Stream& s, InteractionSection& x) {
   std::uint8_t q = static_cast<std::uint8_t>(x.prop_ids.size());
   if (!serializeU8(s, x.flags) || !serializeU8(s, m) || !serializeU8(s, q)) return false;
   if constexpr (Stream::kReading) {
-    if ((x.flags & ~kInteractionsTruncated) != 0) return false;
+    if ((x.flags & ~(kInteractionsTruncated | kInteractionsSelfOmitted)) != 0) return false;
     if (m + q > kMaxSectionBodies || static_cast<std::size_t>(m + q) > s.bitsLeft() / 32) {
       return false;
     }

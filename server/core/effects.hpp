@@ -10,11 +10,11 @@
 
 #include <glm/glm.hpp>
 
+#include "common/scene/seat_layout.hpp"
 #include "common/wire/endpoint.hpp"
 #include "server/core/collision_model.hpp"
 #include "server/core/handles.hpp"
 #include "server/core/props.hpp"
-#include "common/scene/seat_layout.hpp"
 
 namespace vistel::server {
 

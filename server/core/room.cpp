@@ -18,6 +18,7 @@ RoomSettings roomSettings(const ServerConfig& config) {
   s.world.floor_height_m = config.floor_height_m;
   s.world.extent_m = config.world_extent_m;
   s.world.max_parts = config.max_interaction_datagrams;
+  s.world.send_self_contact = config.send_self_contact;
   s.world.spawn_height_m = config.spawn_height_m;
   return s;
 }

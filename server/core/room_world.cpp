@@ -202,12 +202,13 @@ void RoomWorld::writeParts() {
     local_index_.resize(body_count, 0);
   }
 
-  // Priority: pairs between bodies, then self-contact (dropped first when truncating).
+  // Priority: pairs between bodies, then self-contact (dropped first when truncating;
+  // not sent at all unless asked: every client computes its bodies' own).
   order_.clear();
   for (std::uint32_t i = 0; i < pairs.size(); ++i) {
     if (pairs[i].body_a != pairs[i].body_b) order_.push_back(i);
   }
-  for (std::uint32_t i = 0; i < pairs.size(); ++i) {
+  for (std::uint32_t i = 0; settings_.send_self_contact && i < pairs.size(); ++i) {
     if (pairs[i].body_a == pairs[i].body_b) order_.push_back(i);
   }
 
@@ -260,7 +261,9 @@ void RoomWorld::writeParts() {
       mark(pairs[order_[k]].body_b);
     }
     section_.clear();
-    section_.flags = truncated_ ? wire::kInteractionsTruncated : 0;
+    section_.flags = static_cast<std::uint8_t>(
+        (truncated_ ? wire::kInteractionsTruncated : 0) |
+        (settings_.send_self_contact ? 0 : wire::kInteractionsSelfOmitted));
     for (std::size_t b = 0; b < body_count; ++b) {
       if (body_stamp_[b] != epoch_) continue;
       local_index_[b] = static_cast<std::uint8_t>(section_.bodyCount());

@@ -28,21 +28,22 @@
 #include "common/deform/interactions.hpp"
 #include "common/deform/posed_primitives.hpp"
 #include "common/deform/prop.hpp"
+#include "common/scene/seat_layout.hpp"
 #include "common/wire/packets.hpp"
 #include "server/core/collision_model.hpp"
 #include "server/core/handles.hpp"
 #include "server/core/props.hpp"
-#include "common/scene/seat_layout.hpp"
 
 namespace vistel::server {
 
 struct WorldSettings {
-  float gravity_mps2 = 9.81f;     // along -Y
-  float floor_height_m = 0.0f;    // rigid floor plane
-  float extent_m = 20.0f;         // a ball beyond |x|, |z| or this height is put back
-  int max_parts = 4;              // interaction datagrams per tick (1..32)
-  float spawn_height_m = 0.6f;    // spawnPointAbove: this far above the head joint
-  float spawn_forward_m = 0.03f;  // ... and this far in front of it (so it rolls off)
+  float gravity_mps2 = 9.81f;      // along -Y
+  float floor_height_m = 0.0f;     // rigid floor plane
+  float extent_m = 20.0f;          // a ball beyond |x|, |z| or this height is put back
+  int max_parts = 4;               // interaction datagrams per tick (1..32)
+  bool send_self_contact = false;  // list self-contact pairs too (else clients compute them)
+  float spawn_height_m = 0.6f;     // spawnPointAbove: this far above the head joint
+  float spawn_forward_m = 0.03f;   // ... and this far in front of it (so it rolls off)
 };
 
 // One body of the world as the wire names it.

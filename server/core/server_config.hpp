@@ -60,6 +60,7 @@ struct ServerConfig {
   float world_extent_m = 20.0f;       // props beyond this (|x|, |z|, height) are reset (<= 30:
                                       // prop states travel in millimetres, WIRE.md §3.7)
   int max_interaction_datagrams = 4;  // per tick and member; more pairs are truncated
+  bool send_self_contact = false;     // also send self-contact pairs (clients compute them)
   // [props]
   int max_props_per_room = 8;     // a spawn beyond removes the oldest client-spawned prop
   double spawn_interval_s = 2.0;  // a member spawns at most one prop per this

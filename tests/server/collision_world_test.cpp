@@ -19,8 +19,8 @@
 #include "common/anim/posture.hpp"
 #include "common/avatar/avatar_io.hpp"
 #include "common/deform/interactions.hpp"
-#include "server/core/collision_model.hpp"
 #include "common/scene/seat_layout.hpp"
+#include "server/core/collision_model.hpp"
 #include "server/core/server_core.hpp"
 #include "tests/net/sim_network.hpp"
 #include "tests/net/synthetic_avatar.hpp"
@@ -128,10 +128,15 @@ TEST(CollisionWorld, InteractionsAcrossMembersMatchADirectComputation) {
   InteractionList direct;
   buildInteractions(views, scratch, direct);
   std::set<IdPair> expected;
+  std::set<IdPair> expected_across;  // what the server sends: self-contact is left out
+  std::map<std::uint32_t, std::size_t> self_pairs;
   int across = 0;
   for (const Interaction& p : direct.pairs) {
-    expected.insert(ordered({false, ids[p.body_a], p.prim_a}, {false, ids[p.body_b], p.prim_b}));
+    const IdPair pair = ordered({false, ids[p.body_a], p.prim_a}, {false, ids[p.body_b], p.prim_b});
+    expected.insert(pair);
     across += p.body_a != p.body_b ? 1 : 0;
+    if (p.body_a != p.body_b) expected_across.insert(pair);
+    if (p.body_a == p.body_b) ++self_pairs[ids[p.body_a]];
   }
   std::printf("[ measure  ] 3 members: %zu interaction pairs (%d between members)\n",
               expected.size(), across);
@@ -140,11 +145,14 @@ TEST(CollisionWorld, InteractionsAcrossMembersMatchADirectComputation) {
   EXPECT_EQ(serverPairs(room->world()), expected);
   EXPECT_FALSE(room->world().truncated());
 
-  // Every client holds the same list, and maps it onto its scene (members in roster order).
+  // Every client holds the same list (the pairs between members), and maps it onto its
+  // scene (members in roster order) with each body's self-contact computed locally: the
+  // whole of Step 1 again.
   for (std::size_t i = 0; i < names.size(); ++i) {
     const net::ClientSession& s = net.session(i);
     EXPECT_GT(s.interactionsVersion(), 10u);
-    EXPECT_EQ(clientPairs(s), expected) << names[i];
+    EXPECT_TRUE(s.latestInteractions().self_omitted);
+    EXPECT_EQ(clientPairs(s), expected_across) << names[i];
     std::vector<BodyView> scene;
     for (const auto& m : s.members()) {
       std::size_t k = 0;
@@ -156,12 +164,19 @@ TEST(CollisionWorld, InteractionsAcrossMembersMatchADirectComputation) {
     const Status st = s.sceneInteractions(scene, mapped, &dropped);
     ASSERT_TRUE(st) << st.error().message;
     EXPECT_EQ(dropped, 0);
-    EXPECT_EQ(mapped.pairs.size(), expected.size());
-    // A body the caller does not have: its pairs are left out, the rest stay valid.
+    std::set<IdPair> mapped_ids;
+    for (const Interaction& p : mapped.pairs) {
+      mapped_ids.insert(ordered({false, s.members()[p.body_a]->id, p.prim_a},
+                                {false, s.members()[p.body_b]->id, p.prim_b}));
+    }
+    EXPECT_EQ(mapped_ids, expected) << names[i];
+    // A body the caller does not have: its pairs with others are left out (counted), its
+    // own are not made, the rest stay valid.
     scene[1].posed = nullptr;
     ASSERT_TRUE(s.sceneInteractions(scene, mapped, &dropped));
     EXPECT_GT(dropped, 0);
-    EXPECT_EQ(mapped.pairs.size() + static_cast<std::size_t>(dropped), expected.size());
+    EXPECT_EQ(mapped.pairs.size() + static_cast<std::size_t>(dropped),
+              expected.size() - self_pairs[s.members()[1]->id]);
   }
 }
 

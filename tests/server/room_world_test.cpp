@@ -83,6 +83,7 @@ std::set<IdPair> allPairs(const RoomWorld& world, bool self) {
 TEST(RoomWorldParts, ACrowdedListIsSplitIntoSelfContainedParts) {
   WorldSettings settings;
   settings.max_parts = 32;
+  settings.send_self_contact = true;
   RoomWorld world(settings);
   crowd(world);
   const std::set<IdPair> cross = allPairs(world, false);
@@ -106,9 +107,38 @@ TEST(RoomWorldParts, ACrowdedListIsSplitIntoSelfContainedParts) {
   EXPECT_EQ(got, expected);
 }
 
+// By default only the pairs between bodies travel, flagged so; every client adds its
+// bodies' self-contact from its own poses.
+TEST(RoomWorldParts, ByDefaultOnlyPairsBetweenBodiesAreSent) {
+  WorldSettings settings;
+  settings.max_parts = 32;
+  RoomWorld world(settings);
+  crowd(world);
+  bool truncated = true;
+  const auto parts = decodeParts(world, truncated);
+  EXPECT_FALSE(truncated);
+  std::set<IdPair> got;
+  for (const auto& p : parts) got.insert(p.begin(), p.end());
+  EXPECT_EQ(got, allPairs(world, false));
+  EXPECT_FALSE(allPairs(world, true).empty());  // the world itself still has them
+  for (const WorldPart& part : world.parts()) {
+    std::vector<std::uint8_t> datagram;
+    wire::SnapshotHeader h;
+    h.part_count = static_cast<std::uint8_t>(world.parts().size());
+    h.prop_count = part.prop_count;
+    wire::beginSnapshot(h, datagram);
+    wire::appendSnapshotWorld(part.bytes, datagram);
+    wire::finishSnapshot(0, datagram);
+    wire::Snapshot snapshot;
+    ASSERT_TRUE(wire::readSnapshot(datagram, snapshot));
+    EXPECT_NE(snapshot.interactions.flags & wire::kInteractionsSelfOmitted, 0);
+  }
+}
+
 TEST(RoomWorldParts, PastTheLimitSelfContactIsDroppedFirst) {
   WorldSettings settings;
   settings.max_parts = 2;
+  settings.send_self_contact = true;
   RoomWorld world(settings);
   crowd(world);
   bool truncated = false;

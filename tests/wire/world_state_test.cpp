@@ -123,10 +123,12 @@ TEST(WorldState, MalformedSectionsAreRejected) {
   const auto good = bytesOf(sampleSnapshot());
   Snapshot out;
   const std::size_t section = kSnapshotHeaderBytes + kPropStateBytes;  // flags byte
-  // Unknown flag bits.
+  // Unknown flag bits (bit 0 truncated and bit 1 self-contact omitted are defined).
   auto bad = good;
-  bad[section] = 0x02;
+  bad[section] = 0x04;
   EXPECT_FALSE(readSnapshot(bad, out));
+  bad[section] = 0x03;
+  EXPECT_TRUE(readSnapshot(bad, out));
   // A body index past the table (3 bodies: index 3 fits the 2-bit field).
   bad = good;
   bad[section + 17] |= 0x03;  // body_a of the first pair = 3
