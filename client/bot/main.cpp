@@ -4,6 +4,7 @@
 //
 //   vistel-bot --server HOST:PORT --room R --name N (--bvh FILE | --recording FILE)
 //              [--avatar FILE] [--loop] [--duration S] [--count K] [--config FILE]
+//              [--stats-json FILE]
 //
 // K participants (named N-1 .. N-K when K > 1, else N) join room R, each with the avatar
 // (default: default.vavatar in the data folder), and stream the clip retargeted onto
@@ -12,8 +13,11 @@
 // posture solver (client/bot/recording_input.hpp) once for all K participants; a damaged
 // one up to its last good record, saying where it broke. Ends at the clip's or recording's
 // end (without --loop), after --duration seconds, or on SIGINT/SIGTERM, leaving the room
-// cleanly.
+// cleanly. A join refused for a transient reason (the server full, say) is tried again
+// with a jittered backoff (NetDriver). --stats-json writes, at the end, each
+// participant's join time, retries, bytes and latency (client/bot/bot_report.hpp).
 // Never initialises GLFW. Exit status: 0, 1 on an error, 2 on bad usage.
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -28,6 +32,7 @@
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
+#include "client/bot/bot_report.hpp"
 #include "client/bot/recording_input.hpp"
 #include "client/net/asio.hpp"
 #include "client/net/client_config.hpp"
@@ -54,6 +59,7 @@ int main(int argc, char** argv) {
   CLI::App app{"vistel-bot: headless participants replaying a motion clip"};
   std::string server_text, room, name, bvh_path, recording_path, avatar_path;
   std::string config_path = "config/client.toml";
+  std::string stats_path;
   bool loop = false;
   double duration = 0.0;
   int count = 1;
@@ -69,6 +75,8 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--count", count, "number of participants")->check(CLI::Range(1, 1000));
   app.add_option("--config", config_path, "client settings (TOML); built-in defaults if absent");
+  app.add_option("--stats-json", stats_path,
+                 "write each participant's join time, bytes and latency as JSON at the end");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_default_logger(spdlog::stderr_color_mt("vistel-bot"));
 
@@ -155,6 +163,7 @@ int main(int argc, char** argv) {
   std::fflush(stdout);
   asio::io_context io;
   auto work = asio::make_work_guard(io);
+  const double started_at = monotonicSeconds();
   std::vector<std::shared_ptr<NetDriver>> drivers;
   std::vector<std::string> names;
   for (int i = 0; i < count; ++i) {
@@ -213,6 +222,24 @@ int main(int argc, char** argv) {
   }
 
   // Leave cleanly, report, and wait for the network thread (bounded).
+  if (!stats_path.empty()) {
+    const double end = monotonicSeconds();
+    std::vector<ParticipantReport> reports;
+    for (std::size_t i = 0; i < drivers.size(); ++i) {
+      ParticipantReport& r = reports.emplace_back();
+      r.name = names[i];
+      r.state = sessionStateName(drivers[i]->state());
+      r.error = drivers[i]->error();
+      r.join_s = drivers[i]->secondsToLive();
+      r.rejoins = drivers[i]->rejoins();
+      r.live_s = r.join_s < 0.0 ? 0.0 : std::max(0.0, end - started_at - r.join_s);
+      r.stats = drivers[i]->withSession([](const ClientSession& s, double) { return s.stats(); });
+    }
+    if (Status st = writeFileText(stats_path, botReportJson(reports)); !st) {
+      spdlog::error("--stats-json: {}", st.error().message);
+      exit_code = 1;
+    }
+  }
   for (std::size_t i = 0; i < drivers.size(); ++i) {
     const std::string error = drivers[i]->error();
     const auto sent = drivers[i]->withSession(

@@ -41,6 +41,14 @@ double LatencyStats::percentile(double p) const {
   return static_cast<double>(kBins) * kBinMs;
 }
 
+void LatencyStats::merge(const LatencyStats& other) {
+  for (std::size_t i = 0; i < bins_.size(); ++i) bins_[i] += other.bins_[i];
+  count_ += other.count_;
+  sum_ += other.sum_;
+}
+
+double LatencyStats::binMs() { return kBinMs; }
+
 std::string statsJson(const SessionStats& stats, int frames_rendered, double clock_offset_s,
                       double clock_round_trip_s) {
   nlohmann::json doc;
@@ -49,11 +57,14 @@ std::string statsJson(const SessionStats& stats, int frames_rendered, double clo
     doc["members"][name] = {{"postures_received", m.postures_received}, {"rate_hz", m.rateHz()}};
   }
   doc["latency_ms"] = {{"mean", stats.latency.mean()},
+                       {"p50", stats.latency.percentile(50.0)},
                        {"p99", stats.latency.percentile(99.0)},
                        {"samples", stats.latency.count()}};
   doc["frames_rendered"] = frames_rendered;
   doc["postures_sent"] = stats.postures_sent;
+  doc["posture_bytes_sent"] = stats.posture_bytes_sent;
   doc["snapshots_received"] = stats.snapshots_received;
+  doc["datagram_bytes_received"] = stats.datagram_bytes_received;
   doc["datagrams_rejected"] = stats.datagrams_rejected;
   doc["clock"] = {{"offset_s", clock_offset_s}, {"round_trip_ms", clock_round_trip_s * 1e3}};
   return doc.dump(2) + "\n";

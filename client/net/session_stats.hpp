@@ -28,6 +28,11 @@ class LatencyStats {
   double mean() const { return count_ > 0 ? sum_ / static_cast<double>(count_) : 0.0; }
   // The p-th percentile (p in [0, 100]), ms; 0 without samples.
   double percentile(double p) const;
+  // Adds another's samples (the same bins), e.g. over a bot's participants.
+  void merge(const LatencyStats& other);
+  // The histogram: bin i counts samples in [i, i + 1) * binMs().
+  const std::vector<std::uint32_t>& bins() const { return bins_; }
+  static double binMs();
 
  private:
   std::vector<std::uint32_t> bins_;
@@ -39,12 +44,14 @@ struct SessionStats {
   std::map<std::string, MemberReceiveStats> members;  // by member name
   LatencyStats latency;                               // over all remote postures
   std::uint64_t postures_sent = 0;
+  std::uint64_t posture_bytes_sent = 0;  // UDP payload of the postures sent
   std::uint64_t snapshots_received = 0;
-  std::uint64_t datagrams_rejected = 0;  // malformed or unexpected datagrams from the server
+  std::uint64_t datagram_bytes_received = 0;  // UDP payload of every datagram from the server
+  std::uint64_t datagrams_rejected = 0;       // malformed or unexpected datagrams from the server
 };
 
 // The --stats-json document: {"members": {"<name>": {"postures_received": n,
-// "rate_hz": f}}, "latency_ms": {"mean": f, "p99": f, "samples": n},
+// "rate_hz": f}}, "latency_ms": {"mean": f, "p50": f, "p99": f, "samples": n},
 // "frames_rendered": n, "postures_sent": n, ...}.
 std::string statsJson(const SessionStats& stats, int frames_rendered, double clock_offset_s,
                       double clock_round_trip_s);
