@@ -84,7 +84,7 @@ void primitivesIn(const PosedPrimitives& posed, const Bounds& region,
 }  // namespace
 
 void buildInteractions(std::span<const BodyView> bodies, InteractionScratch& s,
-                       InteractionList& out) {
+                       InteractionList& out, bool self_contact) {
   out.pairs.clear();
   const std::size_t n = bodies.size();
 
@@ -103,7 +103,7 @@ void buildInteractions(std::span<const BodyView> bodies, InteractionScratch& s,
     }
     s.body_boxes[b] = box;
     const CombinationGraph* graph = bodies[b].graph;
-    if (graph == nullptr) continue;
+    if (graph == nullptr || !self_contact) continue;
     const auto body = static_cast<std::uint16_t>(b);
     for (const auto& cp : graph->collide_pairs) {
       const PosedPrimitive& p = posed.items[cp[0]];

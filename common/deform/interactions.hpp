@@ -72,8 +72,10 @@ struct InteractionScratch {
 // bodies' self-contact, not a sweep over every primitive of the room. Allocation-free
 // once the vectors have grown to this scene's size. At most 65535 bodies of at most
 // kMaxPrimitives each.
+// self_contact = false lists only the pairs between bodies (a server that leaves each
+// body's own pairs to its clients).
 void buildInteractions(std::span<const BodyView> bodies, InteractionScratch& scratch,
-                       InteractionList& out);
+                       InteractionList& out, bool self_contact = true);
 
 // Step 1 for a single body (self-contact only): the graph's collide pairs tested directly.
 void buildInteractions(const CombinationGraph& graph, const PosedPrimitives& posed,

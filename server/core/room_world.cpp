@@ -184,7 +184,7 @@ void RoomWorld::step(double dt_in) {
   for (PropBody& p : props_) poseProp(p, slot_);
 
   // 3. Step 1 across and within bodies.
-  buildInteractions(views_, scratch_, list_);
+  buildInteractions(views_, scratch_, list_, settings_.send_self_contact);
 
   // 4. The snapshot's world parts.
   prop_records_.clear();

@@ -4,7 +4,7 @@
 //   1. pose every member's primitives (placement x skinning matrices),
 //   2. step every ball by the fields' reaction of everything else (stepBall: gravity,
 //      floor, restitution; the surfaces' velocities from the previous tick's poses),
-//   3. Step 1 across and within bodies (buildInteractions, sweep-and-prune),
+//   3. Step 1 across bodies, and within them when send_self_contact (buildInteractions),
 //   4. serialize the snapshot's world parts once for every recipient: the prop states and
 //      the interaction list, split over at most max_parts datagrams (pairs between bodies
 //      first; self-contact pairs are dropped first when the list does not fit, and the
@@ -41,7 +41,8 @@ struct WorldSettings {
   float floor_height_m = 0.0f;     // rigid floor plane
   float extent_m = 20.0f;          // a ball beyond |x|, |z| or this height is put back
   int max_parts = 4;               // interaction datagrams per tick (1..32)
-  bool send_self_contact = false;  // list self-contact pairs too (else clients compute them)
+  bool send_self_contact = false;  // compute and send self-contact pairs too (else clients
+                                   // compute them; the world's list has none)
   float spawn_height_m = 0.6f;     // spawnPointAbove: this far above the head joint
   float spawn_forward_m = 0.03f;   // ... and this far in front of it (so it rolls off)
 };
