@@ -1,11 +1,16 @@
 // vistel-server: the session server (DESIGN.md §6).
 //   vistel-server [--port 7400] [--config config/server.toml] [--bind ADDRESS]
-//                 [--log-level LEVEL] [--stats-json FILE]
+//                 [--log-level LEVEL] [--stats-json FILE] [--metrics-port P] [--agones]
 // Prints "vistel-server listening on ADDRESS:PORT" on stdout once both sockets are
 // bound (port 0 picks a free one), logs to stderr, and shuts down cleanly on SIGINT or
 // SIGTERM (every client is told, sockets close, exit status 0). --stats-json writes the
 // server's load since the start (LoadStats::totalsJson) to FILE when it stops.
+// --metrics-port serves /healthz, /readyz and Prometheus /metrics on that TCP port of the
+// bind address (0: a free one, printed as "vistel-server metrics on ADDRESS:PORT");
+// --agones reports to the Agones SDK sidecar (ready, health pings, shutdown; deploy/).
+#include <atomic>
 #include <cstdio>
+#include <memory>
 #include <thread>
 #include <vector>
 
@@ -15,6 +20,9 @@
 
 #include "common/base/file.hpp"
 #include "server/core/server_config.hpp"
+#include "server/http/agones_sdk.hpp"
+#include "server/http/http_endpoint.hpp"
+#include "server/http/prometheus.hpp"
 #include "server/shell/asio.hpp"
 #include "server/shell/server_shell.hpp"
 
@@ -29,6 +37,8 @@ int main(int argc, char** argv) {
   std::string bind;
   std::string log_level;
   std::string stats_json;
+  int metrics_port = -1;
+  bool agones = false;
   app.add_option("--config", config_path, "server settings (TOML); built-in defaults if absent");
   app.add_option("--port", port, "TCP and UDP port (0: any free port; default from config: 7400)")
       ->check(CLI::Range(0, 65535));
@@ -36,6 +46,11 @@ int main(int argc, char** argv) {
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error, off");
   app.add_option("--stats-json", stats_json,
                  "write the load (ticks, CPU, datagrams) as JSON to this file at shutdown");
+  app.add_option("--metrics-port", metrics_port,
+                 "serve /healthz, /readyz and /metrics on this TCP port (0: a free port)")
+      ->check(CLI::Range(0, 65535));
+  app.add_flag("--agones", agones,
+               "report to the Agones SDK sidecar at localhost:$AGONES_SDK_HTTP_PORT");
   CLI11_PARSE(app, argc, argv);
 
   spdlog::set_default_logger(spdlog::stderr_color_mt("vistel-server"));
@@ -61,11 +76,56 @@ int main(int argc, char** argv) {
   spdlog::info("listening on {} (TCP control, UDP postures), {} Hz ticks, {} I/O threads",
                shell.localAddress(), config->tick_rate_hz, config->io_threads);
 
+  // Health, readiness and metrics; the orchestrator's sidecar.
+  std::atomic<bool> ready{false};
+  std::unique_ptr<HttpEndpoint> http;
+  if (metrics_port >= 0) {
+    HttpHandlers handlers;
+    handlers.ready = [&ready] { return ready.load(); };
+    handlers.metrics = [&shell, &ready](MetricsReply reply) {
+      shell.collectMetrics(std::move(reply), ready.load());
+    };
+    auto started = HttpEndpoint::start(io, config->bind_address,
+                                       static_cast<std::uint16_t>(metrics_port), handlers);
+    if (!started) {
+      spdlog::error("--metrics-port: {}", started.error().message);
+      return 1;
+    }
+    http = std::move(*started);
+    std::printf("vistel-server metrics on %s\n", http->localAddress().c_str());
+    std::fflush(stdout);
+  }
+  std::unique_ptr<AgonesSdk> sdk;
+  if (agones) {
+    auto options = agonesOptionsFromEnvironment();
+    if (!options) {
+      spdlog::error("--agones: {}", options.error().message);
+      return 1;
+    }
+    sdk = std::make_unique<AgonesSdk>(io, *options);
+    // A closed room frees its slot in the GameServer's "rooms" list (the allocation added
+    // it; deploy/README.md).
+    shell.onRoomClosed([sdk = sdk.get()](const std::string& room) {
+      sdk->removeListValue("rooms", room, [room](Status st) {
+        if (!st)
+          spdlog::warn("Agones: room '{}' not removed from the list: {}", room, st.error().message);
+      });
+    });
+    sdk->ready([](Status st) {
+      if (!st) spdlog::error("Agones: {}", st.error().message);
+    });
+    sdk->startHealth();
+  }
+  ready = true;
+
   // SIGINT/SIGTERM: graceful stop; io.run() returns when everything is closed.
   asio::signal_set signals(io, SIGINT, SIGTERM);
   signals.async_wait([&](const boost::system::error_code& ec, int signal) {
     if (ec) return;
     spdlog::info("signal {} received", signal);
+    ready = false;
+    if (http) http->stop();
+    if (sdk) sdk->stop();
     shell.stop();
   });
 
@@ -83,6 +143,8 @@ int main(int argc, char** argv) {
   for (int i = 1; i < config->io_threads; ++i) threads.emplace_back(run);
   run();
   for (std::thread& t : threads) t.join();
+  http.reset();
+  sdk.reset();
   if (!stats_json.empty()) {
     if (Status st = writeFileText(stats_json, shell.loadJson() + "\n"); !st) {
       spdlog::error("--stats-json: {}", st.error().message);

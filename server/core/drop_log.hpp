@@ -24,6 +24,7 @@ class DropLog {
 
   std::uint64_t total() const { return total_; }
   std::uint64_t count(std::string_view reason) const;
+  const std::map<std::string, std::uint64_t, std::less<>>& counts() const { return counts_; }
 
  private:
   std::string scope_;

@@ -315,6 +315,7 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
   }
   room->members.push_back(m.id);
   c.member = m.id;
+  ++joins_accepted_;
 
   RoomCommand add;
   add.kind = RoomCommand::Kind::kAddMember;

@@ -72,6 +72,8 @@ class Lobby {
   int connectionCount() const { return static_cast<int>(connections_.size()); }
   int memberCount() const { return static_cast<int>(members_.size()); }
   int roomCount() const { return static_cast<int>(rooms_.size()); }
+  // Joins accepted since the start.
+  std::uint64_t joinsAccepted() const { return joins_accepted_; }
   const AvatarStore& avatars() const { return store_; }
   const DropLog& drops() const { return drops_; }
   // Bytes reserved by unfinished avatar uploads (all connections).
@@ -167,6 +169,7 @@ class Lobby {
   std::unordered_map<wire::Endpoint, std::uint32_t, wire::EndpointHash> member_by_endpoint_;
   AvatarStore store_;
   std::uint64_t upload_bytes_in_flight_ = 0;
+  std::uint64_t joins_accepted_ = 0;
   // The one connection uploading each avatar hash; later joins with that hash wait for it.
   std::unordered_map<std::string, ConnId> uploader_of_;
   DropLog drops_{"lobby"};

@@ -24,6 +24,8 @@ void LoadStats::add(Interval& interval, double seconds, int members) {
 }
 
 void LoadStats::addTick(double seconds, int members) {
+  tick_histogram_.observe(seconds);
+  ticks_.fetch_add(1, std::memory_order_relaxed);
   std::lock_guard lock(mutex_);
   add(total_, seconds, members);
   add(interval_, seconds, members);
@@ -80,6 +82,15 @@ std::string LoadStats::report(double now) {
   interval_sent_ = sent;
   interval_bytes_sent_ = bytes;
   return line;
+}
+
+void LoadStats::fillMetrics(MetricsSnapshot& out) const {
+  out.ticks_total = ticks_.load(std::memory_order_relaxed);
+  out.tick_seconds = tick_histogram_.snapshot();
+  out.bytes_in_udp = bytes_received_.load(std::memory_order_relaxed);
+  out.bytes_out_udp = bytes_sent_.load(std::memory_order_relaxed);
+  out.datagrams_in_total = datagrams_received_.load(std::memory_order_relaxed);
+  out.datagrams_out_total = datagrams_sent_.load(std::memory_order_relaxed);
 }
 
 std::string LoadStats::totalsJson(double now) const {

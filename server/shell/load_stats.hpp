@@ -15,6 +15,8 @@
 #include <mutex>
 #include <string>
 
+#include "server/http/prometheus.hpp"
+
 namespace vistel::server {
 
 // Percentiles of a set of durations, milliseconds.
@@ -52,6 +54,9 @@ class LoadStats {
   // Process CPU time (user + system), seconds.
   static double processCpuSeconds();
 
+  // The totals a /metrics scrape reports (ticks, tick histogram, datagrams and bytes).
+  void fillMetrics(MetricsSnapshot& out) const;
+
  private:
   static constexpr int kBins = 10000;  // 10 µs each
   using Histogram = std::array<std::uint32_t, kBins>;
@@ -77,6 +82,8 @@ class LoadStats {
   int members_peak_ = 0;
   double cpu_at_start_ = 0.0;
 
+  AtomicHistogram tick_histogram_{defaultTickBuckets()};
+  std::atomic<std::uint64_t> ticks_{0};
   std::atomic<std::uint64_t> datagrams_sent_{0};
   std::atomic<std::uint64_t> bytes_sent_{0};
   std::atomic<std::uint64_t> send_failures_{0};

@@ -301,6 +301,9 @@ void ServerShell::applyLobbyEffects(Effects& fx) {
       host = it->second;
       if (c.kind == RoomCommand::Kind::kClose) rooms_.erase(it);
     }
+    if (c.kind == RoomCommand::Kind::kClose && room_closed_) {
+      guarded("room closed", [&] { room_closed_(host->room.name()); });  // name is immutable
+    }
     asio::post(host->strand, [this, host, c] {
       if (c.kind == RoomCommand::Kind::kClose) {
         host->closed = true;
@@ -436,6 +439,27 @@ void ServerShell::onDatagram(std::shared_ptr<std::vector<std::uint8_t>> bytes,
                     from.toString());
       break;
   }
+}
+
+// ---------------------------------------------------------------- metrics
+
+void ServerShell::collectMetrics(std::function<void(std::string)> reply, bool ready) {
+  asio::post(lobby_strand_, [this, reply = std::move(reply), ready] {
+    MetricsSnapshot s;
+    s.members = static_cast<std::uint64_t>(lobby_.memberCount());
+    s.rooms = static_cast<std::uint64_t>(lobby_.roomCount());
+    s.connections = static_cast<std::uint64_t>(lobby_.connectionCount());
+    s.uploads_in_progress = static_cast<std::uint64_t>(lobby_.uploadsInProgress());
+    s.ready = ready && !stopping_;
+    s.joins_total = lobby_.joinsAccepted();
+    s.uptime_seconds = now();
+    load_.fillMetrics(s);
+    // The lobby's drops name refused joins and dropped connections alike.
+    for (const auto& [reason, count] : lobby_.drops().counts()) {
+      s.connections_dropped[reason] = count;
+    }
+    reply(formatMetrics(s));
+  });
 }
 
 // ---------------------------------------------------------------- shutdown

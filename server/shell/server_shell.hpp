@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -43,6 +44,14 @@ class ServerShell {
   std::string localAddress() const;
   // The load since the start, as JSON (LoadStats::totalsJson).
   std::string loadJson() const { return load_.totalsJson(now()); }
+  // One /metrics scrape: gathered on the lobby strand, then reply(text) (any thread).
+  // `ready` is what /readyz says.
+  void collectMetrics(std::function<void(std::string)> reply, bool ready);
+  // Called on the lobby strand with a room's name when it closes (the last member left);
+  // set before the io_context runs.
+  void onRoomClosed(std::function<void(const std::string&)> handler) {
+    room_closed_ = std::move(handler);
+  }
   std::uint16_t localPort() const { return port_; }
 
   // Graceful stop: every connection gets a shutting-down error, sockets and timers
@@ -90,6 +99,7 @@ class ServerShell {
   RoomRouter router_;
   std::unordered_map<std::uint32_t, std::shared_ptr<RoomHost>> rooms_;
 
+  std::function<void(const std::string&)> room_closed_;
   std::uint16_t port_ = 0;
   std::atomic<bool> stopping_{false};
 };
