@@ -5,10 +5,10 @@
 #include <gtest/gtest.h>
 
 #include "common/avatar/avatar_io.hpp"
+#include "common/scene/seat_layout.hpp"
 #include "common/wire/packets.hpp"
 #include "server/core/collision_model.hpp"
 #include "server/core/room.hpp"
-#include "common/scene/seat_layout.hpp"
 #include "tests/net/synthetic_avatar.hpp"
 #include "tests/support/alloc_counter.hpp"
 
