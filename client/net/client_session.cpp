@@ -388,6 +388,11 @@ void ClientSession::handleSnapshot(std::span<const std::uint8_t> datagram, doubl
   const wire::SnapshotHeader& header = snapshot_.header;
   last_server_datagram_ = now;
   ++stats_.snapshots_received;
+  // What the server holds of our posture stream.
+  if (encoder_) {
+    if ((header.ack_flags & wire::kAckValid) != 0) encoder_->acknowledge(header.posture_ack);
+    if ((header.ack_flags & wire::kAckWantKeyframe) != 0) encoder_->requestKeyframe();
+  }
   // Prop states of roster props.
   for (const wire::PropStateRecord& state : snapshot_.props) {
     for (auto& p : props_) {
@@ -471,13 +476,22 @@ bool ClientSession::sendPosture(const Posture& posture, double now) {
       static_cast<int>(posture.rotations.size()) != settings_.avatar_joint_count) {
     return false;
   }
-  wire::PosturePacket& p = scratch_packet_;
-  p.header.member_id = member_id_;
-  p.header.key = key_;
-  if (!wire::encodePostureRecord(posture, ++sequence_, clock_.serverTime(now), p.record)) {
+  // Delta-coded against what the server acknowledged (proto/WIRE.md §3.4); the encoder is
+  // made for the joint count of the first posture (the avatar's).
+  const int joints = static_cast<int>(posture.rotations.size());
+  if (!encoder_ || encoder_->options().joint_count != joints) {
+    if (joints < 1 || joints > wire::kMaxWireJoints) return false;
+    wire::PostureDeltaOptions options;
+    options.joint_count = joints;
+    encoder_ = std::make_unique<wire::PostureDeltaEncoder>(options);
+  }
+  scratch_record_bytes_.clear();
+  if (!encoder_->encode(posture, ++sequence_, clock_.serverTime(now), false,
+                        scratch_record_bytes_)) {
     return false;
   }
-  wire::write(p, outbox_.datagrams.emplace_back());
+  wire::writePostureDatagram({member_id_, key_}, scratch_record_bytes_,
+                             outbox_.datagrams.emplace_back());
   ++stats_.postures_sent;
   stats_.posture_bytes_sent += outbox_.datagrams.back().size();
   return true;

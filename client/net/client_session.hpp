@@ -38,6 +38,7 @@
 #include "common/deform/prop.hpp"
 #include "common/wire/framing.hpp"
 #include "common/wire/packets.hpp"
+#include "common/wire/posture_delta.hpp"
 
 namespace vistel::control {
 class ServerMessage;
@@ -47,7 +48,7 @@ class AvatarChunk;
 
 namespace vistel::net {
 
-inline constexpr std::uint32_t kProtocolVersion = 2;
+inline constexpr std::uint32_t kProtocolVersion = 3;
 
 struct SessionSettings {
   std::string room;
@@ -119,8 +120,8 @@ struct ServerPair {
 // The newest complete interaction list (all parts of one tick).
 struct ReceivedInteractions {
   std::uint32_t tick = 0;
-  double server_time = 0.0;  // of the tick (the postures and prop states it was computed from)
-  bool truncated = false;    // the server had more pairs than it sent (self-contact first)
+  double server_time = 0.0;   // of the tick (the postures and prop states it was computed from)
+  bool truncated = false;     // the server had more pairs than it sent (self-contact first)
   bool self_omitted = false;  // only pairs between bodies: self-contact is computed here
   std::vector<ServerPair> pairs;
 };
@@ -265,7 +266,8 @@ class ClientSession {
   // Scratch, reused per datagram.
   wire::Snapshot snapshot_;
   Posture scratch_posture_;
-  wire::PosturePacket scratch_packet_;
+  std::unique_ptr<wire::PostureDeltaEncoder> encoder_;  // our posture stream (first send)
+  std::vector<std::uint8_t> scratch_record_bytes_;
 };
 
 }  // namespace vistel::net

@@ -64,6 +64,24 @@ void write(const PingPacket& p, std::vector<std::uint8_t>& out) { writeAny(p, ou
 void write(const HelloAckPacket& p, std::vector<std::uint8_t>& out) { writeAny(p, out); }
 void write(const PongPacket& p, std::vector<std::uint8_t>& out) { writeAny(p, out); }
 
+bool readPostureDatagram(std::span<const std::uint8_t> datagram, ClientHeader& header,
+                         std::span<const std::uint8_t>& record) {
+  if (datagram.size() <= kClientHeaderBytes || datagram.size() > kMaxDatagramBytes) return false;
+  ReadStream s(datagram.first(kClientHeaderBytes));
+  if (!serialize(s, header, PacketType::kPosture)) return false;
+  record = datagram.subspan(kClientHeaderBytes);
+  return true;
+}
+
+void writePostureDatagram(const ClientHeader& header, std::span<const std::uint8_t> record,
+                          std::vector<std::uint8_t>& out) {
+  ClientHeader h = header;
+  WriteStream w(out);
+  serialize(w, h, PacketType::kPosture);
+  w.align();
+  out.insert(out.end(), record.begin(), record.end());
+}
+
 bool read(std::span<const std::uint8_t> datagram, HelloPacket& out) {
   return readAny(datagram, out);
 }

@@ -19,13 +19,15 @@
 
 namespace vistel::wire {
 
-// Version 2 added the collision world to snapshots (props, interaction lists).
-inline constexpr std::uint8_t kWireVersion = 2;
+// Version 2 added the collision world to snapshots (props, interaction lists); version 3
+// delta-codes the posture a client sends (posture_delta.hpp) and acknowledges it in every
+// snapshot's header.
+inline constexpr std::uint8_t kWireVersion = 3;
 // Largest UDP payload either side sends (stays below common path MTUs). Readers reject
 // anything larger.
 inline constexpr std::size_t kMaxDatagramBytes = 1200;
 inline constexpr std::size_t kClientHeaderBytes = 14;
-inline constexpr std::size_t kSnapshotHeaderBytes = 18;
+inline constexpr std::size_t kSnapshotHeaderBytes = 21;
 inline constexpr std::size_t kSnapshotEntryOverhead = 4;  // member id before each record
 inline constexpr int kMaxInteractionParts = 32;           // datagrams of one tick's list
 
@@ -48,6 +50,10 @@ struct HelloPacket {
   std::uint32_t attempt = 0;  // the client's hello counter, echoed in the ack
 };
 
+// A Posture datagram whose record is a keyframe: the flags byte kPostureKeyframeFlags, then
+// the §3.3 record (what a sender's first posture, and every key_interval_s, is). Other
+// Posture datagrams carry a delta record (readPostureDatagram, PostureDeltaDecoder).
+inline constexpr std::uint8_t kPostureKeyframeFlags = 0x01;
 struct PosturePacket {
   ClientHeader header;
   PostureRecord record;
@@ -77,7 +83,13 @@ struct SnapshotHeader {
   std::uint8_t prop_count = 0;   // prop states
   std::uint8_t part = 0;         // which part of the tick's interaction list this carries
   std::uint8_t part_count = 0;   // parts of the tick's list (1..32); 0 = no section here
+  // The recipient's own posture stream (version 3): the newest sequence the server decoded
+  // (when kAckValid) and whether it needs a keyframe (kAckWantKeyframe).
+  std::uint16_t posture_ack = 0;
+  std::uint8_t ack_flags = 0;
 };
+inline constexpr std::uint8_t kAckValid = 1;
+inline constexpr std::uint8_t kAckWantKeyframe = 2;
 
 struct SnapshotEntry {
   std::uint32_t member_id = 0;
@@ -115,7 +127,9 @@ bool serialize(Stream& s, HelloPacket& p) {
 
 template <typename Stream>
 bool serialize(Stream& s, PosturePacket& p) {
-  return serialize(s, p.header, PacketType::kPosture) && serialize(s, p.record);
+  std::uint8_t flags = kPostureKeyframeFlags;
+  return serialize(s, p.header, PacketType::kPosture) && serializeU8(s, flags) &&
+         flags == kPostureKeyframeFlags && serialize(s, p.record);
 }
 
 template <typename Stream>
@@ -140,9 +154,11 @@ template <typename Stream>
 bool serialize(Stream& s, SnapshotHeader& h) {
   if (!serializeKind(s, PacketType::kSnapshot) || !serializeU32(s, h.tick) ||
       !serializeF64(s, h.server_time) || !serializeU8(s, h.entry_count) ||
-      !serializeU8(s, h.prop_count) || !serializeU8(s, h.part) || !serializeU8(s, h.part_count)) {
+      !serializeU8(s, h.prop_count) || !serializeU8(s, h.part) || !serializeU8(s, h.part_count) ||
+      !serializeU16(s, h.posture_ack) || !serializeU8(s, h.ack_flags)) {
     return false;
   }
+  if ((h.ack_flags & ~(kAckValid | kAckWantKeyframe)) != 0) return false;
   // A section is part `part` of `part_count`; without one, part is 0.
   return h.part_count <= kMaxInteractionParts &&
          (h.part_count == 0 ? h.part == 0 : h.part < h.part_count);
@@ -200,7 +216,17 @@ void write(const PingPacket& p, std::vector<std::uint8_t>& out);
 void write(const HelloAckPacket& p, std::vector<std::uint8_t>& out);
 void write(const PongPacket& p, std::vector<std::uint8_t>& out);
 
-// Reads a whole datagram: true only when it is exactly one valid message of that type.
+// A Posture datagram's client header and its record's bytes (a keyframe or a delta, for a
+// PostureDeltaDecoder): false when it is not a version 3 Posture datagram with a header
+// and at least one record byte. `record` points into `datagram`.
+bool readPostureDatagram(std::span<const std::uint8_t> datagram, ClientHeader& header,
+                         std::span<const std::uint8_t>& record);
+// Appends a Posture datagram: the client header, then the record bytes as given.
+void writePostureDatagram(const ClientHeader& header, std::span<const std::uint8_t> record,
+                          std::vector<std::uint8_t>& out);
+
+// Reads a whole datagram: true only when it is exactly one valid message of that type
+// (for a Posture datagram: a keyframe).
 bool read(std::span<const std::uint8_t> datagram, HelloPacket& out);
 bool read(std::span<const std::uint8_t> datagram, PosturePacket& out);
 bool read(std::span<const std::uint8_t> datagram, PingPacket& out);

@@ -49,7 +49,7 @@
 
 namespace vistel::server {
 
-inline constexpr std::uint32_t kProtocolVersion = 2;
+inline constexpr std::uint32_t kProtocolVersion = 3;
 
 class Lobby {
  public:

@@ -48,6 +48,7 @@ void Room::apply(const RoomCommand& c, double now) {
       m.id = c.member;
       m.key = c.key;
       m.joint_count = c.joint_count;
+      m.decoder = wire::PostureDeltaDecoder(std::max(1, c.joint_count));
       m.last_heard = now;
       m.seat = glm::vec2(c.seat.x, c.seat.z);
       m.record_bytes.reserve(
@@ -74,6 +75,8 @@ void Room::apply(const RoomCommand& c, double now) {
         m->joint_count = c.joint_count;
         m->has_posture = false;
         m->fresh = false;
+        m->decoder = wire::PostureDeltaDecoder(std::max(1, c.joint_count));
+        m->has_ack = false;
         world_.setModel(c.member, c.collision);
       }
       break;
@@ -143,47 +146,66 @@ void Room::onDatagram(std::span<const std::uint8_t> datagram, const wire::Endpoi
 
 void Room::onPosture(std::span<const std::uint8_t> datagram, const wire::Endpoint& from, double now,
                      Effects& fx) {
-  // Decode the whole packet (range-checked, exact length).
-  wire::PosturePacket& p = scratch_posture_;
-  if (!wire::read(datagram, p)) {
+  // The header first (who sends), then the delta-coded record against the sender's
+  // history (range-checked, exact length).
+  wire::ClientHeader header;
+  std::span<const std::uint8_t> coded;
+  if (!wire::readPostureDatagram(datagram, header, coded)) {
     drops_.drop(now, "malformed posture",
                 fmt::format("{} bytes from {}", datagram.size(), from.toString()));
     return;
   }
-  Member* m = authenticate(p.header.member_id, p.header.key, from, now, "posture");
+  Member* m = authenticate(header.member_id, header.key, from, now, "posture");
   if (m == nullptr) return;
   m->last_heard = now;
-
-  // Semantic checks: the avatar's joint count, a plausible capture time, newest wins.
   if (m->joint_count == 0) {
     drops_.drop(now, "avatar not ready",
                 fmt::format("posture from member {:#x} before its avatar", m->id.value));
     return;
   }
-  if (p.record.joint_count != m->joint_count) {
-    drops_.drop(now, "wrong joint count",
-                fmt::format("member {:#x} sent {} joints, its avatar has {}", m->id.value,
-                            p.record.joint_count, m->joint_count));
+  wire::PostureRecord& record = scratch_record_;
+  const wire::DeltaDecodeResult decoded = m->decoder.decode(coded, record);
+  if (decoded.status == wire::DeltaStatus::kMissingReference) {
+    // A lost datagram took the reference: ask for a keyframe (not an error).
+    m->want_keyframe = true;
+    ++postures_without_reference_;
     return;
   }
-  const double capture = wire::fromWireTime(p.record.time, now);
+  if (!decoded.ok()) {
+    drops_.drop(
+        now, "malformed posture",
+        fmt::format("member {:#x}: {} ({} bytes)", m->id.value, decoded.reason, coded.size()));
+    return;
+  }
+  if (decoded.keyframe) m->want_keyframe = false;
+  if (!m->has_ack || wire::sequenceNewer(record.sequence, m->ack)) m->ack = record.sequence;
+  m->has_ack = true;
+
+  // Semantic checks: the avatar's joint count, a plausible capture time, newest wins.
+  if (record.joint_count != m->joint_count) {
+    drops_.drop(now, "wrong joint count",
+                fmt::format("member {:#x} sent {} joints, its avatar has {}", m->id.value,
+                            record.joint_count, m->joint_count));
+    return;
+  }
+  const double capture = wire::fromWireTime(record.time, now);
   if (capture > now + 1.0) {
     drops_.drop(now, "capture time in the future",
                 fmt::format("member {:#x}: {:.3f} s ahead", m->id.value, capture - now));
     return;
   }
-  if (m->has_posture && !wire::sequenceNewer(p.record.sequence, m->sequence)) {
+  if (m->has_posture && !wire::sequenceNewer(record.sequence, m->sequence)) {
     return;  // duplicate or reordered: newest wins (normal on a lossy network, not logged)
   }
 
-  // Keep the record's bytes exactly as received: snapshots copy them.
-  const auto record = datagram.subspan(wire::kClientHeaderBytes);
-  m->record_bytes.assign(record.begin(), record.end());
-  m->sequence = p.record.sequence;
+  // Keep the record's §3.3 bytes: posture batches copy them.
+  m->record_bytes.clear();
+  wire::writeRecord(record, m->record_bytes);
+  m->sequence = record.sequence;
   m->has_posture = true;
   m->fresh = true;
   ++m->accepted;
-  world_.setPosture(m->id, p.record);
+  world_.setPosture(m->id, record);
   ++postures_accepted_;
 
   // On to the others: now when the last batch is long enough ago, else with the next.
@@ -268,6 +290,12 @@ void Room::updateInterest() {
   interest_dirty_ = false;
 }
 
+void Room::acknowledge(const Member& to, wire::SnapshotHeader& header) {
+  header.posture_ack = to.ack;
+  header.ack_flags = static_cast<std::uint8_t>((to.has_ack ? wire::kAckValid : 0) |
+                                               (to.want_keyframe ? wire::kAckWantKeyframe : 0));
+}
+
 void Room::forward(double now, Effects& fx) {
   if (interest_dirty_) updateInterest();
   const std::size_t n = members_.size();
@@ -277,6 +305,7 @@ void Room::forward(double now, Effects& fx) {
   for (std::size_t t = 0; t < n; ++t) {
     const Member& to = members_[t];
     if (!to.bound) continue;
+    acknowledge(to, header);
     // The fresh records this member hears, in room order, packed into as few datagrams
     // as fit (entries only: no world part).
     OutDatagram* out = nullptr;
@@ -315,6 +344,7 @@ void Room::sendWorld(double now, Effects& fx) {
   header.server_time = now;
   for (const Member& to : members_) {
     if (!to.bound) continue;
+    acknowledge(to, header);
     for (std::size_t part = 0; part < parts.size(); ++part) {
       OutDatagram& out = fx.datagrams.emplace_back();
       out.to = to.endpoint;

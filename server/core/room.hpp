@@ -27,6 +27,7 @@
 
 #include "common/wire/endpoint.hpp"
 #include "common/wire/packets.hpp"
+#include "common/wire/posture_delta.hpp"
 #include "server/core/drop_log.hpp"
 #include "server/core/effects.hpp"
 #include "server/core/room_world.hpp"
@@ -59,6 +60,9 @@ class Room {
   // posture and recipient).
   std::uint64_t posturesAccepted() const { return postures_accepted_; }
   std::uint64_t entriesForwarded() const { return entries_forwarded_; }
+  // Delta-coded postures whose reference the room did not hold (a keyframe is then asked
+  // for): normal after a lost datagram.
+  std::uint64_t posturesWithoutReference() const { return postures_without_reference_; }
 
   // Mirrors a lobby decision (add/remove/bind/set avatar); commands for other rooms or
   // unknown members are ignored.
@@ -101,7 +105,11 @@ class Room {
     bool fresh = false;                      // accepted since the last forwarding batch
     std::uint32_t accepted = 0;              // postures accepted (decimates far recipients)
     std::uint16_t sequence = 0;              // of the stored posture
-    std::vector<std::uint8_t> record_bytes;  // serialized newest posture record
+    std::vector<std::uint8_t> record_bytes;  // the newest posture record, §3.3 bytes
+    wire::PostureDeltaDecoder decoder;       // its uplink (delta-coded postures)
+    bool has_ack = false;                    // a posture decoded: ack it in snapshots
+    std::uint16_t ack = 0;                   // the newest sequence decoded
+    bool want_keyframe = false;              // a delta came without its reference
     double last_heard = 0.0;
     bool timeout_reported = false;
   };
@@ -131,6 +139,7 @@ class Room {
   std::vector<Member> members_;
   DropLog drops_;
   std::uint64_t postures_accepted_ = 0;
+  std::uint64_t postures_without_reference_ = 0;
   std::uint64_t entries_forwarded_ = 0;
   bool forward_pending_ = false;
   double next_forward_ = 0.0;
@@ -139,8 +148,10 @@ class Room {
   bool interest_dirty_ = true;
   std::vector<std::uint8_t> interest_;  // [recipient * n + source]: divisor (0 for self)
   std::vector<std::pair<float, int>> scratch_order_;
-  // Reused per datagram, so steady state allocates only the outgoing datagrams.
-  wire::PosturePacket scratch_posture_;
+  // The snapshot header a member gets: the room's, with its own posture acknowledgement.
+  static void acknowledge(const Member& to, wire::SnapshotHeader& header);
+  // Reused per datagram, so steady state allocates nothing.
+  wire::PostureRecord scratch_record_;
 };
 
 }  // namespace vistel::server

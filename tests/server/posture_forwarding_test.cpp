@@ -10,6 +10,7 @@
 
 #include "common/scene/seat_layout.hpp"
 #include "common/wire/packets.hpp"
+#include "common/wire/posture_delta.hpp"
 #include "server/core/room.hpp"
 #include "tests/net/synthetic_avatar.hpp"
 
@@ -107,6 +108,60 @@ TEST(PostureForwarding, APostureReachesTheOthersWithinTheIntervalNotAtTheTick) {
   EXPECT_EQ(d.world_datagrams, 4);
   EXPECT_EQ(d.world_entries, 0);
   EXPECT_TRUE(d.entries.empty());
+}
+
+// The uplink's acknowledgement: every snapshot a member gets carries the newest of its
+// postures the room decoded, and asks for a keyframe when a delta came without its reference.
+TEST(PostureForwarding, SnapshotsAcknowledgeTheUplinkAndAskForAKeyframeAfterALoss) {
+  spdlog::set_level(spdlog::level::err);
+  RoomSettings settings;
+  Room room(RoomId{1}, "ack", settings, 0.0);
+  seat(room, 2);
+  Effects fx;
+  wire::PostureDeltaOptions options;
+  options.joint_count = kJoints;
+  options.reference = wire::DeltaReference::kPrevious;  // each delta needs the frame before
+  wire::PostureDeltaEncoder encoder(options);
+  const auto datagramOf = [&](int sequence, double t) {
+    std::vector<std::uint8_t> record, out;
+    EXPECT_TRUE(encoder.encode(test::syntheticPosture(t), static_cast<std::uint16_t>(sequence), t,
+                               false, record));
+    wire::writePostureDatagram({memberId(0), 500u}, record, out);
+    return out;
+  };
+  const auto headerTo = [&](int member) {
+    wire::Snapshot snapshot;
+    for (const OutDatagram& out : fx.datagrams) {
+      if (out.to == endpointOf(member) && wire::readSnapshot(out.bytes, snapshot)) {
+        return snapshot.header;
+      }
+    }
+    ADD_FAILURE() << "no snapshot to member " << member;
+    return wire::SnapshotHeader{};
+  };
+  room.onDatagram(datagramOf(1, 0.001), endpointOf(0), 0.001, fx);  // a keyframe
+  room.onDatagram(datagramOf(2, 0.002), endpointOf(0), 0.002, fx);
+  fx.clear();
+  room.update(room.nextTickTime(), fx);
+  EXPECT_EQ(headerTo(0).ack_flags, wire::kAckValid);
+  EXPECT_EQ(headerTo(0).posture_ack, 2);
+  EXPECT_EQ(headerTo(1).ack_flags, 0);  // member 1 sent nothing
+  // Frame 3 is lost; frame 4 refers to it.
+  (void)datagramOf(3, 0.003);
+  fx.clear();
+  room.onDatagram(datagramOf(4, 0.004), endpointOf(0), 0.03, fx);
+  EXPECT_EQ(room.posturesWithoutReference(), 1u);
+  fx.clear();
+  room.update(room.nextTickTime(), fx);
+  EXPECT_EQ(headerTo(0).ack_flags, wire::kAckValid | wire::kAckWantKeyframe);
+  EXPECT_EQ(headerTo(0).posture_ack, 2);
+  // The keyframe asked for clears the request.
+  encoder.requestKeyframe();
+  room.onDatagram(datagramOf(5, 0.005), endpointOf(0), 0.04, fx);
+  fx.clear();
+  room.update(room.nextTickTime(), fx);
+  EXPECT_EQ(headerTo(0).ack_flags, wire::kAckValid);
+  EXPECT_EQ(headerTo(0).posture_ack, 5);
 }
 
 // Every member sends `frames` postures at 60 Hz; entries each member receives per frame.

@@ -165,11 +165,12 @@ TEST(PostureCodec, BytesPerMemberFrameWithinBudget) {
     const std::size_t upload = measure(packet);
     std::printf(
         "[ measure  ] %d joints: %zu bytes per member-frame in a snapshot (%zu bits of "
-        "record + 32 bits of id), %zu bytes per posture datagram from the client\n",
+        "record + 32 bits of id), %zu bytes per keyframe posture datagram from the client\n",
         joints, entry, (entry - 4) * 8, upload);
     const std::size_t budget = 4 + 13 + static_cast<std::size_t>(joints) * 4;
     EXPECT_LE(entry, budget);
-    EXPECT_EQ(upload, kClientHeaderBytes + 13 + static_cast<std::size_t>(joints) * 4);
+    // A keyframe: the flags byte before the record (deltas are smaller: posture_delta).
+    EXPECT_EQ(upload, kClientHeaderBytes + 1 + 13 + static_cast<std::size_t>(joints) * 4);
   }
 }
 

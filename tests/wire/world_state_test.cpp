@@ -27,6 +27,8 @@ Snapshot sampleSnapshot() {
   s.header.server_time = 2.0;
   s.header.part = 0;
   s.header.part_count = 1;
+  s.header.posture_ack = 0x1234;
+  s.header.ack_flags = kAckValid;
   s.props.push_back(encodePropState(0x00010000u, {0.0f, 1.5f, 0.0f}, {0.0f, -1.0f, 0.0f}));
   s.interactions = sampleSection();
   return s;
@@ -41,10 +43,11 @@ std::vector<std::uint8_t> bytesOf(const Snapshot& s) {
 // The example of proto/WIRE.md §3.8, byte for byte.
 TEST(WorldState, SnapshotLayoutMatchesWireMd) {
   const std::vector<std::uint8_t> expected = {
-      0x02, 0x82,                                      // version 2, snapshot
+      0x03, 0x82,                                      // version 3, snapshot
       0x05, 0x00, 0x00, 0x00,                          // tick 5
       0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x40,  // 2.0 s
       0x00, 0x01, 0x00, 0x01,                          // 0 entries, 1 prop, part 0 of 1
+      0x34, 0x12, 0x01,                                // posture 0x1234 acknowledged
       0x00, 0x00, 0x01, 0x00,                          // prop 0x00010000
       0x00, 0x00, 0xDC, 0x05, 0x00, 0x00,              // at (0, 1500, 0) mm
       0x00, 0x00, 0x18, 0xFC, 0x00, 0x00,              // moving (0, -1000, 0) mm/s
@@ -129,6 +132,10 @@ TEST(WorldState, MalformedSectionsAreRejected) {
   EXPECT_FALSE(readSnapshot(bad, out));
   bad[section] = 0x03;
   EXPECT_TRUE(readSnapshot(bad, out));
+  // Unknown acknowledgement flags (the header's last byte).
+  bad = good;
+  bad[kSnapshotHeaderBytes - 1] = 0x04;
+  EXPECT_FALSE(readSnapshot(bad, out));
   // A body index past the table (3 bodies: index 3 fits the 2-bit field).
   bad = good;
   bad[section + 17] |= 0x03;  // body_a of the first pair = 3
@@ -222,10 +229,10 @@ TEST(WorldState, RandomSectionsRoundTripAndGarbageIsSafe) {
 
 // The bytes report (proto/WIRE.md §3.8): what the collision world adds to a tick.
 TEST(WorldState, BytesPerTickReport) {
-  EXPECT_EQ(kSnapshotHeaderBytes, 18u);
+  EXPECT_EQ(kSnapshotHeaderBytes, 21u);
   EXPECT_EQ(kPropStateBytes, 16);
   std::printf(
-      "[ measure  ] snapshot header 18 B; prop state 16 B; section 5 B + 4 B/body + "
+      "[ measure  ] snapshot header 21 B; prop state 16 B; section 5 B + 4 B/body + "
       "pairs\n");
   struct Case {
     int bodies;
