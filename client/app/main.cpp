@@ -18,12 +18,17 @@
 // still samples every remote posture each frame. --frames writes every Nth frame
 // (--frames-every, default 1) as a PNG into DIR; --screenshot writes the last frame at
 // exit (without --duration it runs 3 s).
-// --stats-json writes, on exit, the receive rates, latency and frames rendered.
+// --stats-json writes, on exit, the receive rates, latency and frames rendered, and for
+// rendered frames frame_ms {p50, p99, max} (the frame's work, without the wait for the next
+// one), deform_share (the deformable component's part of it) and the bodies per frame
+// deformed at full rate, at a lower rate, or drawn rigid (the level of detail's tiers).
 //
 // Threads: this (main) thread owns the window/GL and renders; a network thread runs
 // Asio (NetDriver); a source thread produces the own postures; the room view skins in
 // its worker pool. Exit status: 0, 1 on an error (the session's reason is printed), 2 on
 // bad usage. SIGINT/SIGTERM leave the room cleanly.
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -121,6 +126,64 @@ struct FrameMember {
   bool has_posture = false;
   Posture posture;
 };
+
+// Per-frame figures of the rendered frames, summarised for --stats-json.
+class FrameFigures {
+ public:
+  FrameFigures() { frame_ms_.reserve(kMaxSamples); }
+
+  void add(double frame_ms, double deform_ms, int full, int reduced, int rigid) {
+    if (frame_ms_.size() < kMaxSamples) frame_ms_.push_back(frame_ms);  // no allocation
+    total_ms_ += frame_ms;
+    deform_ms_ += deform_ms;
+    full_ += full;
+    reduced_ += reduced;
+    rigid_ += rigid;
+    last_ = {full, reduced, rigid};
+    ++frames_;
+  }
+
+  // The fields as JSON members (no braces), keys indented by two spaces.
+  std::string json() const {
+    std::vector<double> sorted = frame_ms_;
+    std::sort(sorted.begin(), sorted.end());
+    auto pick = [&](double p) {
+      if (sorted.empty()) return 0.0;
+      const auto i = static_cast<std::size_t>(p / 100.0 * static_cast<double>(sorted.size() - 1));
+      return sorted[i];
+    };
+    const double n = frames_ > 0 ? static_cast<double>(frames_) : 1.0;
+    return fmt::format(
+        "  \"frame_ms\": {{\"p50\": {:.3f}, \"p99\": {:.3f}, \"max\": {:.3f}}},\n"
+        "  \"deform_share\": {:.4f},\n"
+        "  \"bodies_per_frame\": {{\"full\": {:.2f}, \"reduced\": {:.2f}, \"rigid\": "
+        "{:.2f}}},\n"
+        "  \"bodies_last_frame\": {{\"full\": {}, \"reduced\": {}, \"rigid\": {}}}",
+        pick(50.0), pick(99.0), sorted.empty() ? 0.0 : sorted.back(),
+        total_ms_ > 0.0 ? deform_ms_ / total_ms_ : 0.0, full_ / n, reduced_ / n, rigid_ / n,
+        last_[0], last_[1], last_[2]);
+  }
+
+ private:
+  static constexpr std::size_t kMaxSamples = 1u << 18;  // about 73 minutes at 60 Hz
+  std::vector<double> frame_ms_;
+  double total_ms_ = 0.0;
+  double deform_ms_ = 0.0;
+  double full_ = 0.0;
+  double reduced_ = 0.0;
+  double rigid_ = 0.0;
+  std::array<int, 3> last_ = {0, 0, 0};
+  std::int64_t frames_ = 0;
+};
+
+// The JSON object `json` ("{...}\n") with `fields` added as its last members.
+std::string withFields(const std::string& json, const std::string& fields) {
+  const std::size_t close = json.rfind('}');
+  if (close == std::string::npos) return json;
+  std::size_t end = close;
+  while (end > 0 && (json[end - 1] == '\n' || json[end - 1] == ' ')) --end;
+  return json.substr(0, end) + ",\n" + fields + "\n" + json.substr(close);
+}
 
 glm::mat4 seatPlacement(const Seat& seat) {
   return glm::rotate(glm::translate(glm::mat4(1.0f), glm::vec3(seat.x, 0.0f, seat.z)), seat.yaw,
@@ -253,6 +316,7 @@ int main(int argc, char** argv) {
     options.height = config->height;
     options.offscreen = !hasDisplay();
     options.worker_threads = config->worker_threads;
+    options.gpu_skinning = config->gpu_skinning;
     options.stereo = stereo_text == "side-by-side" ? StereoMode::kSideBySide
                      : stereo_text == "anaglyph"   ? StereoMode::kAnaglyph
                                                    : StereoMode::kOff;
@@ -310,7 +374,11 @@ int main(int argc, char** argv) {
   std::vector<MemberView> views;
   // The deformable component on every drawn body with an implicit model (client/deform).
   std::unique_ptr<RoomDeformer> deformer;
-  if (view && config->deform && !rigid_only) deformer = std::make_unique<RoomDeformer>();
+  if (view && config->deform && !rigid_only) {
+    deformer = std::make_unique<RoomDeformer>();
+    if (Status st = deformer->setLod(config->lod); !st) spdlog::warn("{}", st.error().message);
+  }
+  FrameFigures figures;
   ServerInteractions server_lists;
   InteractionList received_list;
   std::unordered_map<std::string, std::shared_ptr<const AvatarModel>> models;
@@ -351,6 +419,7 @@ int main(int argc, char** argv) {
     });
     // Draw (the view skins every avatar in its worker pool).
     if (view) {
+      const Clock::time_point frame_start = Clock::now();
       view->pollEvents();
       if (view->shouldClose()) break;
       if (sensors) sensors->onKeys(view->takeKeyPresses());
@@ -398,6 +467,22 @@ int main(int argc, char** argv) {
       }
       view->render(views);
       if (deformer) deformer->finish();
+      {
+        // This frame's figures: the deformation's wall time is prepare() plus Steps 2-3
+        // spread over the view's threads.
+        const double frame_ms =
+            std::chrono::duration<double, std::milli>(Clock::now() - frame_start).count();
+        const int drawn = view->lastStats().members_drawn;
+        if (deformer) {
+          const DeformFrameStats& d = deformer->lastStats();
+          const double deform_ms =
+              d.prepare_ms + d.deform_cpu_ms / static_cast<double>(view->workerThreads());
+          figures.add(frame_ms, deform_ms, d.full, d.reduced,
+                      std::max(drawn - d.full - d.reduced, 0));
+        } else {
+          figures.add(frame_ms, 0.0, 0, 0, drawn);
+        }
+      }
       if (!frames_dir.empty() && frame % frames_every == 0) {
         const std::string path = fmt::format("{}/frame_{:05d}.png", frames_dir, frame);
         if (Status st = view->saveFrame(path); !st) spdlog::warn("{}", st.error().message);
@@ -431,7 +516,7 @@ int main(int argc, char** argv) {
     return std::make_pair(text, line);
   });
   if (!stats_path.empty()) {
-    if (Status st = writeFileText(stats_path, json); !st) {
+    if (Status st = writeFileText(stats_path, withFields(json, figures.json())); !st) {
       spdlog::error("{}", st.error().message);
       exit_code = 1;
     }

@@ -11,7 +11,17 @@
 // The view's skinning workers then run Steps 2-3 of each body on its rigidly skinned
 // vertices (DeformScene::deformBody), concurrently for different bodies. A body whose
 // skinning does not match what prepare() posed (the view drew it at rest, say) is left
-// rigid that frame and counted.
+// rigid that frame and counted. Each body is posed once per frame: prepare() poses it
+// for Step 1 and the view takes those matrices (PostSkinDeformer::copyPose).
+//
+// Level of detail (common/scene/deform_lod.hpp, setLod): after Step 1, prepare() chooses every
+// body's tier from its distance to the viewer (setViewer; by default the self member's seat) and
+// its contacts this frame: kFull bodies deform every frame, kReduced ones on one frame in
+// reduced_every and in between are drawn with the offsets of their last deformation
+// (model space) added to their rigid skinning, kRigid ones are skinned only. With the
+// view's gpu_skinning both kinds are skinned in the vertex shader (their hooks say
+// needsVertices() == false, or give the offsets through offsetsOnly()). A body that has
+// no offsets yet (it just became kReduced) deforms at once. lastStats() counts them.
 //
 // The scene is rebuilt (allocating) only when the set of (view id, avatar) changes: a
 // member joins or leaves, an avatar arrives, a prop appears; other frames allocate
@@ -28,9 +38,23 @@
 
 #include "client/view/room_view.hpp"
 #include "common/base/result.hpp"
+#include "common/scene/deform_lod.hpp"
 #include "common/scene/deform_scene.hpp"
 
 namespace vistel {
+
+// The last frame's work (valid after finish()).
+struct DeformFrameStats {
+  int full = 0;                // bodies at full rate (tier kFull)
+  int reduced = 0;             // bodies at the lower rate (kReduced): deformed this frame or held
+  int rigid = 0;               // bodies skinned only (kRigid)
+  int deformed = 0;            // bodies whose Steps 2-3 ran this frame
+  int held = 0;                // kReduced bodies drawn with their held offsets this frame
+  double prepare_ms = 0.0;     // wall time of prepare(): posing, Step 1, tiers
+  double pose_ms = 0.0;        // of which posing skeletons and primitives
+  double step1_ms = 0.0;       // of which Step 1 (the interaction list)
+  double deform_cpu_ms = 0.0;  // Steps 2-3 and held offsets, summed over the worker threads
+};
 
 class RoomDeformer {
  public:
@@ -50,6 +74,13 @@ class RoomDeformer {
   // validation the scene's own list is used and the error returned (the frame is still
   // complete).
   Status prepare(double time, const InteractionList* received = nullptr);
+  // Level of detail from the next prepare() on (invalid settings are refused and the
+  // previous ones kept). Default: DeformLodSettings{} (on).
+  Status setLod(const DeformLodSettings& settings);
+  const DeformLodSettings& lod() const { return lod_; }
+  // Where the viewer is (room space) for the level of detail; nullopt (the default): the
+  // self member's seat, or the room's origin when no member is the self.
+  void setViewer(std::optional<glm::vec3> p_room) { viewer_override_ = p_room; }
   // After view.render(views): combines the contacts of the bodies deformed this frame.
   void finish();
 
@@ -63,6 +94,9 @@ class RoomDeformer {
   std::optional<BodyContactSummary> contact(std::uint32_t view_id) const;
   // Bodies the view skinned differently from prepare() in the last frame (left rigid).
   int skippedLastFrame() const { return skipped_reported_; }
+  // The tier of a view's body this frame (after prepare()), or nullopt when not a body.
+  std::optional<DeformTier> tier(std::uint32_t view_id) const;
+  const DeformFrameStats& lastStats() const { return stats_; }
   // Scene rebuilds so far.
   int rebuilds() const { return rebuilds_; }
 
@@ -74,10 +108,23 @@ class RoomDeformer {
     friend bool operator==(const Key&, const Key&) = default;
   };
 
-  // What the hooks on the view share with this object (they may outlive it).
+  // What a hook does to its body this frame (decided by prepare()).
+  enum class Action : std::uint8_t { kDeform, kDeformAndHold, kHold, kRigid };
+
+  // What the hooks on the view share with this object (they may outlive it). The
+  // per-body vectors are written by prepare() (this thread) and by body i's hook only
+  // (held_*[i]) while the view's workers run.
   struct Shared {
     std::optional<DeformScene> scene;
     std::atomic<int> skipped{0};
+    std::atomic<int> deformed{0};
+    std::atomic<int> held{0};
+    std::atomic<std::int64_t> deform_ns{0};
+    std::vector<Action> action;                    // (nbody)
+    std::vector<std::uint8_t> held_valid;          // (nbody) held offsets are usable
+    std::vector<std::uint64_t> held_generation;    // (nbody) SkinOffsets::generation
+    std::vector<std::vector<glm::vec3>> held_pos;  // (nbody)(nvert) deformed - rigid, model
+    std::vector<std::vector<glm::vec3>> held_nrm;  // (nbody)(nvert) normal offsets, model
   };
 
   Status rebuild(std::span<const MemberView> views, RoomView& view);
@@ -90,6 +137,18 @@ class RoomDeformer {
   std::vector<std::shared_ptr<Hook>> hooks_;  // per body, installed on the view
   int skipped_reported_ = 0;
   int rebuilds_ = 0;
+  // Level of detail.
+  DeformLodSettings lod_;
+  std::optional<glm::vec3> viewer_override_;
+  glm::vec3 self_position_{0.0f};  // this frame's self member's seat (sync)
+  bool have_self_ = false;
+  std::int64_t frame_ = 0;
+  DeformLodScratch lod_scratch_;
+  std::vector<glm::vec3> body_positions_;   // (nbody) room space
+  std::vector<std::uint8_t> in_contact_;    // (nbody)
+  std::vector<DeformTier> tiers_;           // (nbody) this frame
+  std::vector<DeformTier> previous_tiers_;  // (nbody) last frame (empty after a rebuild)
+  DeformFrameStats stats_;
 };
 
 }  // namespace vistel

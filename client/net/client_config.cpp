@@ -28,8 +28,8 @@ Result<ClientConfig> parseClientConfig(std::string_view toml_text, std::string_v
     return fail("{}: {} ({})", source_name, e.description(), where.str());
   }
   for (const auto& [key, node] : root) {
-    static const std::set<std::string, std::less<>> kSections = {"network", "playback", "source",
-                                                                 "avatars", "view",     "deform"};
+    static const std::set<std::string, std::less<>> kSections = {
+        "network", "playback", "source", "avatars", "view", "deform", "lod"};
     if (!kSections.count(key.str()) || !node.is_table()) {
       return fail("{}: unknown section or key '{}'", source_name, key.str());
     }
@@ -63,11 +63,26 @@ Result<ClientConfig> parseClientConfig(std::string_view toml_text, std::string_v
   VISTEL_CONFIG_TRY(view.number("height", c.height, 16, 8192));
   VISTEL_CONFIG_TRY(view.number("worker_threads", c.worker_threads, 1, 64));
   VISTEL_CONFIG_TRY(view.number("frame_rate_hz", c.frame_rate_hz, 1, 1000));
+  VISTEL_CONFIG_TRY(view.boolean("gpu_skinning", c.gpu_skinning));
   VISTEL_CONFIG_TRY(view.checkUnknown());
   ConfigTable deform(root, "deform", source_name);
   VISTEL_CONFIG_TRY(deform.boolean("enabled", c.deform));
   VISTEL_CONFIG_TRY(deform.boolean("server_interactions", c.server_interactions));
   VISTEL_CONFIG_TRY(deform.checkUnknown());
+  ConfigTable lod(root, "lod", source_name);
+  DeformLodSettings& l = c.lod;
+  VISTEL_CONFIG_TRY(lod.boolean("enabled", l.enabled));
+  VISTEL_CONFIG_TRY(lod.number("full_radius_m", l.full_radius_m, 0, 1000));
+  VISTEL_CONFIG_TRY(lod.number("reduced_radius_m", l.reduced_radius_m, 0, 1000));
+  VISTEL_CONFIG_TRY(lod.number("hysteresis_m", l.hysteresis_m, 0, 100));
+  VISTEL_CONFIG_TRY(lod.number("reduced_every", l.reduced_every, 1, 60));
+  VISTEL_CONFIG_TRY(lod.number("max_full", l.max_full, 0, 65535));
+  VISTEL_CONFIG_TRY(lod.number("max_reduced", l.max_reduced, 0, 65535));
+  VISTEL_CONFIG_TRY(lod.boolean("contact_full", l.contact_full));
+  VISTEL_CONFIG_TRY(lod.checkUnknown());
+  if (Status valid = validateDeformLodSettings(l); !valid) {
+    return fail("{}: [lod] {}", source_name, valid.error().message);
+  }
   return c;
 }
 

@@ -8,6 +8,7 @@
 
 #include "client/net/client_session.hpp"
 #include "common/base/result.hpp"
+#include "common/scene/deform_lod.hpp"
 
 namespace vistel::net {
 
@@ -25,9 +26,12 @@ struct ClientConfig {
   int height = 720;
   int worker_threads = 2;
   double frame_rate_hz = 60.0;  // render (or headless sampling) rate
+  bool gpu_skinning = true;     // rigid bodies skinned in the vertex shader
   // [deform]
   bool deform = true;               // run the deformable component on the drawn bodies
   bool server_interactions = true;  // use the server's Step 1 lists (else compute locally)
+  // [lod]: which bodies deform at full rate, at a lower rate or not at all
+  DeformLodSettings lod;
 };
 
 Result<ClientConfig> parseClientConfig(std::string_view toml_text, std::string_view source_name);

@@ -27,6 +27,50 @@ void main() {
 }
 )";
 
+// Dual-quaternion skinning (Kavan et al. 2007) of the bind pose, as skinDualQuaternion on
+// the CPU: blend in the first influence's hemisphere, normalise, rotate, translate.
+// u_dq[2 j] is joint j's real part, u_dq[2 j + 1] its dual part (x, y, z, w). Then the
+// optional model-space offsets (zero when their arrays are off).
+constexpr const char* kGpuSkinVertex = R"(#version 330 core
+layout(location = 0) in vec3 a_position;
+layout(location = 1) in vec3 a_normal;
+layout(location = 2) in uvec4 a_joints;
+layout(location = 3) in vec4 a_weights;
+layout(location = 4) in vec3 a_offset;
+layout(location = 5) in vec3 a_normal_offset;
+uniform mat4 u_model;
+uniform mat4 u_view_proj;
+uniform mat3 u_normal_matrix;
+uniform vec4 u_dq[192];
+out vec3 v_world;
+out vec3 v_normal;
+vec3 rotate(vec4 q, vec3 v) { return v + 2.0 * cross(q.xyz, cross(q.xyz, v) + q.w * v); }
+void main() {
+  vec4 pivot = u_dq[2u * a_joints.x];
+  vec4 real = vec4(0.0);
+  vec4 dual = vec4(0.0);
+  for (int s = 0; s < 4; ++s) {
+    float w = a_weights[s];
+    if (w <= 0.0) continue;
+    uint j = a_joints[s];
+    vec4 r = u_dq[2u * j];
+    float signed_w = dot(r, pivot) < 0.0 ? -w : w;
+    real += r * signed_w;
+    dual += u_dq[2u * j + 1u] * signed_w;
+  }
+  float len = length(real);
+  real /= len;
+  dual /= len;
+  dual -= real * dot(real, dual);
+  vec3 t = 2.0 * (real.w * dual.xyz - dual.w * real.xyz + cross(real.xyz, dual.xyz));
+  vec3 p_model = rotate(real, a_position) + t + a_offset;
+  vec4 world = u_model * vec4(p_model, 1.0);
+  v_world = world.xyz;
+  v_normal = u_normal_matrix * normalize(rotate(real, a_normal) + a_normal_offset);
+  gl_Position = u_view_proj * world;
+}
+)";
+
 constexpr const char* kSkinFragment = R"(#version 330 core
 in vec3 v_world;
 in vec3 v_normal;
@@ -100,6 +144,9 @@ void buildDiamond(std::array<glm::vec3, 24>& positions, std::array<glm::vec3, 24
   }
 }
 
+// Key light from above, in front and to the side (room space): unit direction towards it.
+glm::vec3 keyLight() { return glm::normalize(glm::vec3(0.4f, 0.8f, 0.45f)); }
+
 }  // namespace
 
 glm::vec3 memberColor(int index) {
@@ -118,6 +165,7 @@ glm::vec3 tintedSkin(const glm::vec3& member_color) {
 
 SceneRenderer::~SceneRenderer() {
   if (skin_program_ != 0) glDeleteProgram(skin_program_);
+  if (gpu_skin_program_ != 0) glDeleteProgram(gpu_skin_program_);
   if (floor_program_ != 0) glDeleteProgram(floor_program_);
   if (floor_vao_ != 0) glDeleteVertexArrays(1, &floor_vao_);
 }
@@ -132,6 +180,17 @@ Status SceneRenderer::init() {
   skin_color_ = uniformLocation(skin_program_, "u_color");
   skin_eye_ = uniformLocation(skin_program_, "u_eye");
   skin_light_ = uniformLocation(skin_program_, "u_light");
+
+  auto gpu_skin = buildProgram("gpu skin", kGpuSkinVertex, kSkinFragment);
+  if (!gpu_skin) return gpu_skin.error();
+  gpu_skin_program_ = *gpu_skin;
+  gpu_skin_model_ = uniformLocation(gpu_skin_program_, "u_model");
+  gpu_skin_view_proj_ = uniformLocation(gpu_skin_program_, "u_view_proj");
+  gpu_skin_normal_matrix_ = uniformLocation(gpu_skin_program_, "u_normal_matrix");
+  gpu_skin_color_ = uniformLocation(gpu_skin_program_, "u_color");
+  gpu_skin_eye_ = uniformLocation(gpu_skin_program_, "u_eye");
+  gpu_skin_light_ = uniformLocation(gpu_skin_program_, "u_light");
+  gpu_skin_joints_ = uniformLocation(gpu_skin_program_, "u_dq");
 
   auto floor = buildProgram("floor", kFloorVertex, kFloorFragment);
   if (!floor) return floor.error();
@@ -205,9 +264,7 @@ void SceneRenderer::beginMeshes(const EyeCamera& eye) const {
   const glm::mat4 view_proj = eye.projection * eye.view;
   glUniformMatrix4fv(skin_view_proj_, 1, GL_FALSE, glm::value_ptr(view_proj));
   glUniform3fv(skin_eye_, 1, glm::value_ptr(eye.position));
-  // Key light from above, in front and to the side (room space).
-  const glm::vec3 light = glm::normalize(glm::vec3(0.4f, 0.8f, 0.45f));
-  glUniform3fv(skin_light_, 1, glm::value_ptr(light));
+  glUniform3fv(skin_light_, 1, glm::value_ptr(keyLight()));
 }
 
 void SceneRenderer::drawMesh(const GpuMesh& mesh, const glm::mat4& model,
@@ -217,6 +274,31 @@ void SceneRenderer::drawMesh(const GpuMesh& mesh, const glm::mat4& model,
   glUniformMatrix3fv(skin_normal_matrix_, 1, GL_FALSE, glm::value_ptr(normal_matrix));
   glUniform3fv(skin_color_, 1, glm::value_ptr(color));
   mesh.draw();
+}
+
+void SceneRenderer::beginSkinnedMeshes(const EyeCamera& eye) const {
+  beginMeshes(eye);
+  glUseProgram(gpu_skin_program_);
+  const glm::mat4 view_proj = eye.projection * eye.view;
+  glUniformMatrix4fv(gpu_skin_view_proj_, 1, GL_FALSE, glm::value_ptr(view_proj));
+  glUniform3fv(gpu_skin_eye_, 1, glm::value_ptr(eye.position));
+  glUniform3fv(gpu_skin_light_, 1, glm::value_ptr(keyLight()));
+}
+
+void SceneRenderer::drawSkinnedMesh(const GpuSkinMesh& mesh, std::span<const DualQuat> skin,
+                                    const glm::mat4& model, const glm::vec3& color,
+                                    bool with_offsets) const {
+  static_assert(sizeof(DualQuat) == 8 * sizeof(float), "two vec4 per joint");
+  const int joints = mesh.jointCount();
+  if (mesh.empty() || joints > kMaxGpuSkinJoints || static_cast<int>(skin.size()) < joints) {
+    return;
+  }
+  const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(model)));
+  glUniformMatrix4fv(gpu_skin_model_, 1, GL_FALSE, glm::value_ptr(model));
+  glUniformMatrix3fv(gpu_skin_normal_matrix_, 1, GL_FALSE, glm::value_ptr(normal_matrix));
+  glUniform3fv(gpu_skin_color_, 1, glm::value_ptr(color));
+  glUniform4fv(gpu_skin_joints_, 2 * joints, &skin[0].real.x);
+  mesh.draw(with_offsets);
 }
 
 void SceneRenderer::drawMarker(const glm::vec3& p_room, float size, const glm::vec3& color) const {

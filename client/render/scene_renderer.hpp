@@ -3,12 +3,16 @@
 // diamonds. Colours are linear 0..1 RGB written straight to an RGBA8 target.
 #pragma once
 
+#include <span>
+
 #include <epoxy/gl.h>
 #include <glm/glm.hpp>
 
 #include "client/render/camera.hpp"
 #include "client/render/gpu_mesh.hpp"
+#include "client/render/gpu_skin_mesh.hpp"
 #include "common/base/result.hpp"
+#include "common/math/dual_quat.hpp"
 
 namespace vistel {
 
@@ -40,6 +44,15 @@ class SceneRenderer {
   void drawMesh(const GpuMesh& mesh, const glm::mat4& model, const glm::vec3& color) const;
   // A diamond `size` metres tall centred at p_room.
   void drawMarker(const glm::vec3& p_room, float size, const glm::vec3& color) const;
+  // Meshes skinned in the vertex shader: call beginSkinnedMeshes once per eye (after which
+  // drawMesh/drawMarker need beginMeshes again), then drawSkinnedMesh any number of times.
+  // skin: the joints' dual quaternions, bind -> posed model space (mesh.jointCount() of
+  // them; a draw with fewer is skipped); model: model -> room (rigid).
+  void beginSkinnedMeshes(const EyeCamera& eye) const;
+  // with_offsets: add the mesh's uploaded offsets (GpuSkinMesh::uploadOffsets).
+  void drawSkinnedMesh(const GpuSkinMesh& mesh, std::span<const DualQuat> skin,
+                       const glm::mat4& model, const glm::vec3& color,
+                       bool with_offsets = false) const;
 
  private:
   GLuint skin_program_ = 0;
@@ -49,6 +62,14 @@ class SceneRenderer {
   GLint skin_color_ = -1;
   GLint skin_eye_ = -1;
   GLint skin_light_ = -1;
+  GLuint gpu_skin_program_ = 0;
+  GLint gpu_skin_model_ = -1;
+  GLint gpu_skin_view_proj_ = -1;
+  GLint gpu_skin_normal_matrix_ = -1;
+  GLint gpu_skin_color_ = -1;
+  GLint gpu_skin_eye_ = -1;
+  GLint gpu_skin_light_ = -1;
+  GLint gpu_skin_joints_ = -1;
   GLuint floor_program_ = 0;
   GLint floor_view_proj_ = -1;
   GLint floor_center_ = -1;

@@ -14,6 +14,7 @@
 #include "client/render/gl_context.hpp"
 #include "client/render/gl_util.hpp"
 #include "client/render/gpu_mesh.hpp"
+#include "client/render/gpu_skin_mesh.hpp"
 #include "client/render/label_renderer.hpp"
 #include "client/render/render_target.hpp"
 #include "client/render/scene_renderer.hpp"
@@ -52,6 +53,9 @@ struct MemberFrame {
   glm::vec3 box_min{0.0f};             // room-space bounds of positions
   glm::vec3 box_max{0.0f};
   glm::mat4 head_delta{1.0f};  // posed head transform * inverse(rest), model space
+  bool gpu = false;            // skinned in the vertex shader (positions, normals unused)
+  bool has_offsets = false;    // gpu, plus the deformer's offsets
+  SkinOffsets offsets;         // (has_offsets)
 };
 
 // Everything the view keeps about one member between frames.
@@ -71,6 +75,10 @@ struct MemberSlot {
   bool seen = false;                // present in this render()
   std::atomic<int> chunks_left{0};  // skinning items of this member still running
   GpuMesh mesh;
+  bool gpu_capable = false;            // gpu_skinning on and the avatar fits it
+  GpuSkinMesh gpu_mesh;                // (gpu_capable, not headless)
+  float reach = 0.0f;                  // farthest vertex from its first joint at rest (m): bounds
+  std::uint64_t uploaded_offsets = 0;  // generation of the offsets in gpu_mesh (0: none)
 
   MemberFrame& back() { return frames[1 - front]; }
   const MemberFrame& shown() const { return frames[front]; }
@@ -147,6 +155,7 @@ struct RoomView::Impl final : WorkerPool::Job {
   int headFromJointMaps(const Skeleton& skeleton);
   void poseBack(MemberSlot& slot, const MemberView& member);
   static void finishMember(MemberSlot& slot);
+  static void jointBounds(MemberSlot& slot);
   void drawFrame();
   void applyInput();
   void computeCameras(glm::ivec2 size);
@@ -222,12 +231,35 @@ void RoomView::Impl::prepareSlot(MemberSlot& slot, const MemberView& member, int
   if (head_joint < 0) head_joint = findHeadJoint(avatar.skeleton);
   slot.head = measureHead(avatar, head_joint);
   slot.head_rest_inverse = glm::inverse(slot.head.rest_model);
-  slot.mesh.create(avatar.skin.vertexCount(), avatar.skin.indices);
+  if (!options.headless) slot.mesh.create(avatar.skin.vertexCount(), avatar.skin.indices);
+  // Rigid skinning on the GPU where it fits, and how far the skin reaches from the joints.
+  slot.gpu_capable = false;
+  slot.uploaded_offsets = 0;
+  if (options.gpu_skinning && GpuSkinMesh::supports(avatar.skin, avatar.skeleton.jointCount())) {
+    if (options.headless) {
+      slot.gpu_capable = true;
+    } else if (Status st = slot.gpu_mesh.create(avatar.skin, avatar.skeleton.jointCount()); st) {
+      slot.gpu_capable = true;
+    } else {
+      warning = fmt::format("member {}: {}", member.id, st.error().message);
+    }
+    std::vector<glm::vec3> joint_rest(njoint);
+    for (std::size_t j = 0; j < njoint; ++j) {
+      joint_rest[j] = glm::vec3(glm::inverse(avatar.skeleton.inverse_bind[j])[3]);
+    }
+    const auto k = static_cast<std::size_t>(avatar.skin.influences);
+    slot.reach = 0.0f;
+    for (std::size_t v = 0; v < nvert; ++v) {
+      const glm::vec3& joint = joint_rest[avatar.skin.joints[v * k]];
+      slot.reach = std::max(slot.reach, glm::distance(avatar.skin.positions[v], joint));
+    }
+  }
   slot.valid = true;
 }
 
 // Copies what the batch needs into the back frame and poses the skeleton (cheap:
-// per joint); the vertices are skinned by the batch.
+// per joint; taken from the member's deformer when it posed the same posture already);
+// the vertices are skinned by the batch.
 void RoomView::Impl::poseBack(MemberSlot& slot, const MemberView& member) {
   MemberFrame& frame = slot.back();
   const Skeleton& skeleton = slot.avatar->skeleton;
@@ -247,9 +279,25 @@ void RoomView::Impl::poseBack(MemberSlot& slot, const MemberView& member) {
   } else {
     slot.deformer = deformer->second;
   }
-  poseSkeleton(skeleton, frame.posture, frame.joint_model);
-  skinningMatrices(skeleton, frame.joint_model, frame.skin);
+  if (slot.deformer && slot.deformer->copyPose(frame.posture, frame.joint_model, frame.skin)) {
+    ++stats.poses_copied;
+  } else {
+    poseSkeleton(skeleton, frame.posture, frame.joint_model);
+    skinningMatrices(skeleton, frame.joint_model, frame.skin);
+  }
   toDualQuats(frame.skin, frame.dq);
+  // On the GPU: members whose deformer leaves the vertices rigid, or only adds offsets.
+  frame.gpu = false;
+  frame.has_offsets = false;
+  if (slot.gpu_capable) {
+    if (!slot.deformer || !slot.deformer->needsVertices()) {
+      frame.gpu = true;
+    } else if (slot.deformer->offsetsOnly(frame.offsets)) {
+      const auto nvert = static_cast<std::size_t>(slot.avatar->skin.vertexCount());
+      frame.gpu = frame.has_offsets =
+          frame.offsets.positions.size() == nvert && frame.offsets.normals.size() == nvert;
+    }
+  }
   frame.head_delta =
       slot.head.joint >= 0
           ? frame.joint_model[static_cast<std::size_t>(slot.head.joint)] * slot.head_rest_inverse
@@ -292,9 +340,23 @@ void RoomView::Impl::finishMember(MemberSlot& slot) {
   frame.box_max = hi;
 }
 
+// Room-space bounds of a GPU-skinned member: its posed joints, swollen by the skin's reach.
+void RoomView::Impl::jointBounds(MemberSlot& slot) {
+  MemberFrame& frame = slot.back();
+  glm::vec3 lo(std::numeric_limits<float>::max());
+  glm::vec3 hi(std::numeric_limits<float>::lowest());
+  for (const glm::mat4& joint : frame.joint_model) {
+    const glm::vec3 p(frame.placement * joint[3]);
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  frame.box_min = lo - glm::vec3(slot.reach);
+  frame.box_max = hi + glm::vec3(slot.reach);
+}
+
 void RoomView::Impl::render(std::span<const MemberView> members) {
   const Clock::time_point start = Clock::now();
-  context->makeCurrent();
+  if (context) context->makeCurrent();
   stats = FrameStats{};
 
   // Match members to slots (by id), preparing new avatars and posing skeletons.
@@ -319,13 +381,21 @@ void RoomView::Impl::render(std::span<const MemberView> members) {
     }
     if (!slot->valid) continue;
     poseBack(*slot, member);
+    slot->in_batch = true;
+    if (slot->back().gpu) {
+      // Skinned in the vertex shader: nothing for the workers.
+      jointBounds(*slot);
+      slot->chunks_left.store(0, std::memory_order_relaxed);
+      ++stats.members_gpu_skinned;
+      stats.gpu_offsets += slot->back().has_offsets ? 1 : 0;
+      continue;
+    }
     const int nvert = slot->avatar->skin.vertexCount();
     int chunks = 0;
     for (int first = 0; first < nvert; first += kChunkVertices, ++chunks) {
       items.push_back(WorkItem{slot, first, std::min(kChunkVertices, nvert - first)});
     }
     slot->chunks_left.store(chunks, std::memory_order_relaxed);
-    slot->in_batch = true;
     stats.vertices_skinned += nvert;
   }
   // Members that left: free their buffers.
@@ -342,7 +412,15 @@ void RoomView::Impl::render(std::span<const MemberView> members) {
   stats.skin_ms = millisecondsSince(start);
 
   const Clock::time_point draw_start = Clock::now();
-  drawFrame();
+  if (options.headless) {
+    // No GL: count the members and place the cameras (what the deformer's level of
+    // detail and the tests read), draw nothing.
+    for (const auto& slot : slots) stats.members_drawn += slot->has_front ? 1 : 0;
+    computeCameras(glm::ivec2(options.width, options.height));
+    ++frames;
+  } else {
+    drawFrame();
+  }
   stats.draw_ms = millisecondsSince(draw_start);
 }
 
@@ -449,10 +527,19 @@ void RoomView::Impl::computeCameras(glm::ivec2 size) {
 
 void RoomView::Impl::drawFrame() {
   // Upload the shown vertices.
+  bool any_gpu = false;
   for (auto& slot : slots) {
     if (!slot->has_front) continue;
-    slot->mesh.upload(slot->shown().positions, slot->shown().normals);
     ++stats.members_drawn;
+    const MemberFrame& shown = slot->shown();
+    any_gpu = any_gpu || shown.gpu;
+    if (!shown.gpu) {
+      slot->mesh.upload(shown.positions, shown.normals);
+    } else if (shown.has_offsets && shown.offsets.generation != slot->uploaded_offsets) {
+      slot->gpu_mesh.uploadOffsets(shown.offsets.positions, shown.offsets.normals);
+      slot->uploaded_offsets = shown.offsets.generation;
+      ++stats.gpu_offset_uploads;
+    }
   }
   const glm::ivec2 size =
       context->isWindow() ? context->framebufferSize() : glm::ivec2(options.width, options.height);
@@ -487,9 +574,19 @@ void RoomView::Impl::drawFrame() {
     // Skin, then markers above heads.
     scene->beginMeshes(eye);
     for (const auto& slot : slots) {
-      if (!slot->has_front) continue;
+      if (!slot->has_front || slot->shown().gpu) continue;
       scene->drawMesh(slot->mesh, slot->shown().placement,
                       tintedSkin(memberColor(static_cast<int>(slot->id))));
+    }
+    if (any_gpu) {
+      scene->beginSkinnedMeshes(eye);
+      for (const auto& slot : slots) {
+        if (!slot->has_front || !slot->shown().gpu) continue;
+        scene->drawSkinnedMesh(slot->gpu_mesh, slot->shown().dq, slot->shown().placement,
+                               tintedSkin(memberColor(static_cast<int>(slot->id))),
+                               slot->shown().has_offsets);
+      }
+      scene->beginMeshes(eye);
     }
     if (!options.show_tags) continue;
     for (const auto& slot : slots) {
@@ -542,6 +639,10 @@ Result<std::unique_ptr<RoomView>> RoomView::create(const ViewOptions& options) {
   checked.worker_threads = std::clamp(options.worker_threads, 1, 64);
   checked.msaa_samples = std::min(options.msaa_samples, 16);
   auto impl = std::make_unique<Impl>(checked);
+  if (checked.headless) {
+    impl->backend = "headless (no GL)";
+    return std::unique_ptr<RoomView>(new RoomView(std::move(impl)));
+  }
 
   // A window when a display exists (unless told otherwise), else EGL offscreen.
   const ContextOptions context_options{options.width, options.height, options.title, options.vsync};
@@ -600,9 +701,11 @@ Result<std::unique_ptr<RoomView>> RoomView::create(const ViewOptions& options) {
   return std::unique_ptr<RoomView>(new RoomView(std::move(impl)));
 }
 
-bool RoomView::shouldClose() const { return impl_->context->shouldClose(); }
+bool RoomView::shouldClose() const { return impl_->context && impl_->context->shouldClose(); }
 
-void RoomView::pollEvents() { impl_->context->pollEvents(); }
+void RoomView::pollEvents() {
+  if (impl_->context) impl_->context->pollEvents();
+}
 
 std::string RoomView::takeKeyPresses() { return std::exchange(impl_->keys, std::string()); }
 
@@ -611,6 +714,7 @@ void RoomView::render(std::span<const MemberView> members) { impl_->render(membe
 namespace {
 
 Status saveImpl(RoomView::Impl& impl, const std::string& path, PngSpeed speed) {
+  if (!impl.context) return fail("writing PNG {}: a headless view draws no pixels", path);
   if (!impl.frame_valid) return fail("writing PNG {}: no frame has been rendered yet", path);
   impl.context->makeCurrent();
   Image image;
@@ -629,6 +733,7 @@ Status RoomView::saveFrame(const std::string& png_path) {
 }
 
 Result<Image> RoomView::readFrame() {
+  if (!impl_->context) return fail("reading the frame: a headless view draws no pixels");
   if (!impl_->frame_valid) return fail("reading the frame: no frame has been rendered yet");
   impl_->context->makeCurrent();
   Image image;
@@ -637,6 +742,8 @@ Result<Image> RoomView::readFrame() {
 }
 
 int RoomView::framesRendered() const { return impl_->frames; }
+
+int RoomView::workerThreads() const { return impl_->options.worker_threads; }
 
 void RoomView::setDeformer(std::uint32_t member_id, std::shared_ptr<PostSkinDeformer> deformer) {
   if (deformer) {
@@ -664,15 +771,18 @@ StereoMode RoomView::stereo() const { return impl_->options.stereo; }
 ViewMode RoomView::viewMode() const { return impl_->options.view; }
 
 glm::ivec2 RoomView::framebufferSize() const {
-  return impl_->context->isWindow() ? impl_->context->framebufferSize()
-                                    : glm::ivec2(impl_->options.width, impl_->options.height);
+  return impl_->context && impl_->context->isWindow()
+             ? impl_->context->framebufferSize()
+             : glm::ivec2(impl_->options.width, impl_->options.height);
 }
 
 std::span<const EyeCamera> RoomView::lastCameras() const { return impl_->cameras; }
 
 std::span<const glm::vec3> RoomView::skinnedPositions(std::uint32_t member_id) const {
   for (const auto& slot : impl_->slots) {
-    if (slot->id == member_id && slot->has_front) return slot->shown().positions;
+    if (slot->id == member_id && slot->has_front && !slot->shown().gpu) {
+      return slot->shown().positions;
+    }
   }
   return {};
 }

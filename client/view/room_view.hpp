@@ -1,9 +1,11 @@
 // RoomView: draws everyone in one shared room (DESIGN.md §1, §6 "Threads").
 //
-// Per frame, for every member: pose the skeleton, skin the mesh with dual quaternions
-// (Kavan et al. 2007) in a worker pool into that member's double-buffered vertex arrays
-// (sized once per avatar; no allocation per frame after warm-up), run the member's
-// optional post-skin deformer (the deformable component's hook), then upload and draw:
+// Per frame, for every member: pose the skeleton (or take the pose its deformer already
+// made: PostSkinDeformer::copyPose), skin the mesh with dual quaternions (Kavan et al.
+// 2007) in a worker pool into that member's double-buffered vertex arrays (sized once per
+// avatar; no allocation per frame after warm-up), run the member's optional post-skin
+// deformer (the deformable component's hook) — or, with gpu_skinning, leave the skinning
+// of members that need no CPU vertices to the vertex shader — then upload and draw:
 // lit skin with a per-member tint, a checker floor, a marker and a name tag above each
 // head, a camera that frames the room or sits in the self member's head, optionally in
 // stereo (side by side or red/cyan anaglyph).
@@ -14,7 +16,10 @@
 //
 // Display: a GLFW window when $DISPLAY (or $WAYLAND_DISPLAY) is set and
 // options.offscreen is false; otherwise an EGL surfaceless context (Mesa) rendering
-// into an offscreen framebuffer. GLFW is initialised only when a window is made.
+// into an offscreen framebuffer. GLFW is initialised only when a window is made. With
+// options.headless there is no GL at all: render() poses, skins and deforms every member
+// and places the cameras, but draws nothing (the CPU work of a frame, for benchmarks and
+// tests on machines without GL).
 #pragma once
 
 #include <cstdint>
@@ -49,6 +54,14 @@ struct SkinFrame {
   std::span<glm::vec3> normals;            // unit normals (nvert); edit in place
 };
 
+// Fixed model-space offsets a deformer adds to a member's rigid skinning (see
+// PostSkinDeformer::offsetsOnly).
+struct SkinOffsets {
+  std::span<const glm::vec3> positions;  // added to the skinned positions (nvert)
+  std::span<const glm::vec3> normals;    // added to the skinned normals, then normalised (nvert)
+  std::uint64_t generation = 0;          // changes whenever the contents change (never 0)
+};
+
 // The hook for the deformable component: runs after skinning on each member that has
 // one. One instance per member (it may keep per-member state such as elastic memory);
 // deform() for different members may run concurrently on different worker threads,
@@ -58,6 +71,26 @@ class PostSkinDeformer {
  public:
   virtual ~PostSkinDeformer() = default;
   virtual void deform(const SkinFrame& frame) = 0;
+  // Optional, on the view's thread before the member is skinned: when the deformer has
+  // already posed this very posture this frame (DeformScene::prepare poses every body for
+  // Step 1), it copies the posed joint transforms and skinning matrices (model space,
+  // njoint each) into the spans and returns true, and the view does not pose the member
+  // again. The default returns false (the view poses).
+  virtual bool copyPose(const Posture& /*posture*/, std::span<glm::mat4> /*joint_model*/,
+                        std::span<glm::mat4> /*skin*/) {
+    return false;
+  }
+  // Optional, on the view's thread before the member is skinned: false when deform()
+  // would leave this frame's vertices as they are (e.g. a body the level of detail draws
+  // rigid), so that a view with gpu_skinning may skin the member in the vertex shader and
+  // not call deform() this frame. The default: true.
+  virtual bool needsVertices() { return true; }
+  // Optional, on the view's thread before the member is skinned (after needsVertices()
+  // said true): true when this frame deform() would only add fixed offsets to the rigid
+  // skinning (a body between two deformations); `out` then holds them, valid until the
+  // next render(). A view with gpu_skinning then adds them in the vertex shader, uploading
+  // them only when their generation changes, and does not call deform(). Default: false.
+  virtual bool offsetsOnly(SkinOffsets& /*out*/) { return false; }
 };
 
 // One member as the view draws it. Exactly these six fields, so that positional
@@ -90,15 +123,27 @@ struct ViewOptions {
   float vertical_fov_deg = 50.0f;  // camera field of view (vertical, degrees)
   bool vsync = true;               // window only
   bool show_tags = true;           // markers and name tags above heads
+  bool headless = false;           // no GL: render() skins, deforms and places cameras only
+  // Rigid skinning in the vertex shader for members that need no CPU vertices this frame
+  // (no deformer, or one whose needsVertices() is false, or whose offsetsOnly() gives the
+  // offsets to add in the shader) and whose avatar fits the GPU path
+  // (at most 4 influences, kMaxGpuSkinJoints joints): the CPU then only poses them, their
+  // skinnedPositions() are empty, and their bounds (camera framing) come from the posed
+  // joints. Headless, such members are not skinned at all (a GPU client's CPU work).
+  bool gpu_skinning = false;
 };
 
 // Timings and counts of the last frame (milliseconds of wall time on the calling thread).
 struct FrameStats {
   int members_drawn = 0;
   int vertices_skinned = 0;
-  int postures_at_rest = 0;  // members whose posture did not fit their skeleton
-  double skin_ms = 0.0;      // pose + skin + deform (worker pool, waited for)
-  double draw_ms = 0.0;      // upload + draw calls + resolve (+ present in a window)
+  int postures_at_rest = 0;     // members whose posture did not fit their skeleton
+  double skin_ms = 0.0;         // pose + skin + deform (worker pool, waited for)
+  double draw_ms = 0.0;         // upload + draw calls + resolve (+ present in a window)
+  int poses_copied = 0;         // members whose pose came from their deformer (copyPose)
+  int members_gpu_skinned = 0;  // members skinned in the vertex shader (gpu_skinning)
+  int gpu_offsets = 0;          // of which with a deformer's offsets (offsetsOnly)
+  int gpu_offset_uploads = 0;   // offsets uploaded (changed since the member's last upload)
 };
 
 class RoomView {
@@ -110,7 +155,7 @@ class RoomView {
   RoomView(const RoomView&) = delete;
   RoomView& operator=(const RoomView&) = delete;
 
-  // Window closed by the user (or Escape). Always false offscreen.
+  // Window closed by the user (or Escape). Always false offscreen and headless.
   bool shouldClose() const;
   // Handles window events (resize, mouse orbit/zoom, keys: V view mode, B stereo
   // cycle, Escape). No-op offscreen.
@@ -127,13 +172,16 @@ class RoomView {
 
   // Writes the last rendered frame as PNG (width x height of the framebuffer, rows from
   // the top). saveScreenshot uses the best compression, saveFrame the fastest (for
-  // frame sequences). Errors name the path. Before the first render(): an error.
+  // frame sequences). Errors name the path. Before the first render() or headless: an
+  // error.
   Status saveScreenshot(const std::string& png_path);
   Status saveFrame(const std::string& png_path);
   // The last rendered frame's pixels.
   Result<Image> readFrame();
 
   int framesRendered() const;
+  // Threads that skin, the calling thread included (ViewOptions::worker_threads, clamped).
+  int workerThreads() const;
 
   // The post-skin deformer of a member id (null removes it). Kept by id until replaced,
   // also across the member leaving and coming back.
@@ -159,10 +207,11 @@ class RoomView {
   // The last frame's eye cameras: one (kOff) or two (left, right).
   std::span<const EyeCamera> lastCameras() const;
   // The last frame's skinned (and deformed) vertices of a member, model space; empty if
-  // the member was not drawn. Valid until the next render().
+  // the member was not drawn or was skinned on the GPU. Valid until the next render().
   std::span<const glm::vec3> skinnedPositions(std::uint32_t member_id) const;
   const FrameStats& lastStats() const;
-  // "EGL surfaceless ..." or "GLFW window", and the GL version and renderer strings.
+  // "EGL surfaceless ..." or "GLFW window", and the GL version and renderer strings
+  // ("headless (no GL)" without GL).
   std::string backendDescription() const;
   // The latest problem met while drawing (an avatar that failed validation and is not
   // drawn, a framebuffer that could not be made), or empty.

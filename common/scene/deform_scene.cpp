@@ -44,6 +44,13 @@ bool postureFits(const Skeleton& skeleton, const Posture& p) {
   return true;
 }
 
+// Two arrays of the same size and bytes (empty ones are equal).
+template <typename T>
+bool sameBits(std::span<const T> a, std::span<const T> b) {
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size_bytes()) == 0);
+}
+
 // A range of one body's vertices for the parallel skinning of step().
 struct SkinItem {
   int body = 0;
@@ -298,6 +305,14 @@ bool DeformScene::matchesPrepared(int index, std::span<const glm::mat4> skin,
   return skin.size() == b.skin_model.size() &&
          std::memcmp(skin.data(), b.skin_model.data(), skin.size_bytes()) == 0 &&
          std::memcmp(&placement, &b.def.placement, sizeof(glm::mat4)) == 0;
+}
+
+bool DeformScene::posedWith(int index, const Posture& posture) const {
+  const SceneSlot& b = impl_->bodies[static_cast<std::size_t>(index)];
+  const Posture& used = *b.used;
+  return sameBits(std::span(&posture.root_translation, 1), std::span(&used.root_translation, 1)) &&
+         sameBits(std::span(posture.rotations), std::span(used.rotations)) &&
+         sameBits(std::span(posture.translations), std::span(used.translations));
 }
 
 void DeformScene::deformBody(int index, std::span<glm::vec3> positions,

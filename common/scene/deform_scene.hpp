@@ -129,6 +129,12 @@ class DeformScene {
   // skinning matrices (bind -> posed model space, njoint) and placement, bit for bit.
   bool matchesPrepared(int index, std::span<const glm::mat4> skin,
                        const glm::mat4& placement) const;
+  // Whether the last prepare() or step() posed body `index` from exactly this posture (root
+  // translation, rotations and translations equal bit for bit; a posture that did not fit
+  // was posed at rest, so pass the rest posture then). When true, jointTransforms() and
+  // skinMatrices() are what poseSkeleton and skinningMatrices would give for it, so a
+  // renderer can take them instead of posing the body a second time. O(njoint).
+  bool posedWith(int index, const Posture& posture) const;
   // Split frame, part 2 (any thread; concurrently only for different bodies): Steps 2-3 on
   // body `index`'s rigidly skinned vertices, given and returned in the body's model space
   // (nvert each; normals unit). A body that does not deform, or spans of the wrong size,
