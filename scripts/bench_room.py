@@ -19,7 +19,9 @@ finish, stops the server and prints one JSON object:
   snapshots_dropped        datagrams the server's socket refused to send (send errors)
   rejected_datagrams       datagrams the bots could not parse (should be 0)
 
-Only loopback addresses are used. Bots run for the duration plus the join window.
+Only loopback addresses are used. Bots run for the duration plus the join window, at
+niceness 5 (--bots-nice): they stand for clients on other machines, and on a small machine
+a hundred of them would otherwise queue the server's threads behind theirs.
 """
 
 import argparse
@@ -64,6 +66,9 @@ def main():
     parser.add_argument("--per-process", type=int, default=25,
                         help="participants per bot process")
     parser.add_argument("--json", help="also write the JSON here")
+    parser.add_argument("--bots-nice", type=int, default=5,
+                        help="niceness of the bot processes (0: none); the bots stand for "
+                             "remote clients, so by default they yield to the server")
     args = parser.parse_args()
     if args.members < 1 or args.rooms < 1 or args.duration <= 0 or args.per_process < 1:
         parser.error("--members, --rooms, --per-process must be >= 1 and --duration > 0")
@@ -119,6 +124,8 @@ def main():
             log = open(os.path.join(work, f"bot-{room}-{group}.log"), "w")
             if not args.join_at_once and launched > 0:
                 time.sleep(0.25)
+            if args.bots_nice != 0:
+                cmd = ["nice", "-n", str(args.bots_nice)] + cmd
             bots.append(subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT))
             reports.append(report)
             launched += 1
@@ -174,6 +181,7 @@ def main():
         "snapshots_dropped": srv["send_failures"],
         "rejected_datagrams": sum(p.get("datagrams_rejected", 0) for p in participants),
         "errors": sorted({p["error"] for p in participants if p["error"]})[:5],
+        "bots_nice": args.bots_nice,
         "wall_s": round(elapsed, 1),
         "logs": work,
     }

@@ -1,6 +1,15 @@
 #include "server/shell/server_shell.hpp"
 
+#include <array>
+#include <cerrno>
+#include <cstring>
 #include <exception>
+
+#if defined(__linux__)
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/uio.h>
+#endif
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -366,6 +375,52 @@ void ServerShell::sendDatagrams(DatagramQueue& datagrams) {
   if (datagrams.empty()) return;
   std::lock_guard lock(udp_mutex_);
   if (!udp_.is_open()) return;
+#if defined(__linux__)
+  // Up to 64 datagrams a system call (a posture batch of a 100-member room is ~100).
+  constexpr std::size_t kBatch = 64;
+  std::array<mmsghdr, kBatch> messages{};
+  std::array<iovec, kBatch> parts{};
+  std::array<sockaddr_storage, kBatch> addresses{};
+  const int fd = udp_.native_handle();
+  std::size_t next = 0;
+  bool waited = false;
+  while (next < datagrams.size()) {
+    const std::size_t count = std::min(kBatch, datagrams.size() - next);
+    for (std::size_t k = 0; k < count; ++k) {
+      OutDatagram& d = datagrams[next + k];
+      const asio::ip::udp::endpoint to = toAsio(d.to);
+      std::memcpy(&addresses[k], to.data(), to.size());
+      parts[k] = {d.bytes.data(), d.bytes.size()};
+      messages[k] = {};
+      messages[k].msg_hdr.msg_name = &addresses[k];
+      messages[k].msg_hdr.msg_namelen = static_cast<socklen_t>(to.size());
+      messages[k].msg_hdr.msg_iov = &parts[k];
+      messages[k].msg_hdr.msg_iovlen = 1;
+    }
+    const int sent = ::sendmmsg(fd, messages.data(), static_cast<unsigned>(count), 0);
+    if (sent < 0) {
+      if (errno == EINTR) continue;
+      // A full send buffer (Asio keeps the socket non-blocking): wait a little for room,
+      // as a blocking send would, then try again.
+      if ((errno == EAGAIN || errno == EWOULDBLOCK) && !waited) {
+        pollfd writable{fd, POLLOUT, 0};
+        waited = true;
+        if (::poll(&writable, 1, 5) > 0) continue;
+      }
+      waited = false;
+      // The first datagram of the batch failed (a full buffer, an unreachable address):
+      // count it and go on with the rest.
+      load_.addSendFailure();
+      spdlog::debug("send to {} failed: {}", datagrams[next].to.toString(), std::strerror(errno));
+      ++next;
+      continue;
+    }
+    waited = false;
+    for (int k = 0; k < sent; ++k)
+      load_.addSent(datagrams[next + static_cast<std::size_t>(k)].bytes.size());
+    next += static_cast<std::size_t>(sent);
+  }
+#else
   for (const OutDatagram& d : datagrams) {
     boost::system::error_code ec;
     udp_.send_to(asio::buffer(d.bytes), toAsio(d.to), 0, ec);
@@ -376,6 +431,7 @@ void ServerShell::sendDatagrams(DatagramQueue& datagrams) {
       load_.addSent(d.bytes.size());
     }
   }
+#endif
   datagrams.clear();
 }
 
