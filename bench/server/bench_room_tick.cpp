@@ -62,6 +62,16 @@ const Fixture* fixture() {
   return f.get();
 }
 
+// The fixture is there (else the benchmark is skipped, saying why); quiet logs.
+bool ready(benchmark::State& state) {
+  if (fixture() == nullptr) {
+    state.SkipWithError("no default.vavatar or gesture clips in the build's data folder");
+    return false;
+  }
+  spdlog::set_level(spdlog::level::err);
+  return true;
+}
+
 struct RoomRun {
   std::unique_ptr<Room> room;
   std::vector<wire::Endpoint> endpoints;
@@ -120,11 +130,7 @@ void postures(RoomRun& run) {
 }
 
 void BM_RoomTick(benchmark::State& state) {
-  if (fixture() == nullptr) {
-    state.SkipWithError("no default.vavatar or gesture clips in the build's data folder");
-    return;
-  }
-  spdlog::set_level(spdlog::level::err);
+  if (!ready(state)) return;
   const int members = static_cast<int>(state.range(0));
   RoomRun run;
   fill(run, members);
@@ -160,11 +166,7 @@ void BM_RoomTick(benchmark::State& state) {
 BENCHMARK(BM_RoomTick)->Arg(16)->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond);
 
 void BM_RoomForward(benchmark::State& state) {
-  if (fixture() == nullptr) {
-    state.SkipWithError("no default.vavatar or gesture clips in the build's data folder");
-    return;
-  }
-  spdlog::set_level(spdlog::level::err);
+  if (!ready(state)) return;
   const int members = static_cast<int>(state.range(0));
   RoomRun run;
   fill(run, members);

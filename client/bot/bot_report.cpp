@@ -21,7 +21,7 @@ std::string botReportJson(const std::vector<ParticipantReport>& participants) {
                                    {"posture_bytes_sent", p.stats.posture_bytes_sent},
                                    {"datagram_bytes_received", p.stats.datagram_bytes_received},
                                    {"snapshots_received", p.stats.snapshots_received},
-         {"datagrams_rejected", p.stats.datagrams_rejected},
+                                   {"datagrams_rejected", p.stats.datagrams_rejected},
                                    {"postures_received", received},
                                    {"latency_ms",
                                     {{"p50", p.stats.latency.percentile(50.0)},

@@ -73,6 +73,15 @@ struct DeltaFrameInfo {
   int bytes = 0;                // record bytes appended
 };
 
+// One frame of a history (encoder or decoder) but its rotations: which sequence the slot
+// holds, its time and root; the rotation codes sit in a flat array beside the slots.
+struct DeltaHistorySlot {
+  bool valid = false;
+  std::uint16_t sequence = 0;
+  std::uint32_t time = 0;
+  std::array<std::int16_t, 3> root_mm{};
+};
+
 class PostureDeltaEncoder {
  public:
   // Options are clamped into range (joint_count to 1..255, tolerances to their maxima,
@@ -106,12 +115,7 @@ class PostureDeltaEncoder {
   const PostureDeltaOptions& options() const { return options_; }
 
  private:
-  struct Slot {
-    bool valid = false;
-    std::uint16_t sequence = 0;
-    std::uint32_t time = 0;
-    std::array<std::int16_t, 3> root_mm{};
-  };
+  using Slot = DeltaHistorySlot;
   bool encodeRecord(const Posture* truth, bool force_key, std::vector<std::uint8_t>& out,
                     DeltaFrameInfo* info);
   int chooseReference(std::uint16_t sequence, std::uint32_t time) const;  // slot index, or -1
@@ -178,12 +182,7 @@ class PostureDeltaDecoder {
   bool held(std::uint16_t sequence, PostureRecord& out) const;
 
  private:
-  struct Slot {
-    bool valid = false;
-    std::uint16_t sequence = 0;
-    std::uint32_t time = 0;
-    std::array<std::int16_t, 3> root_mm{};
-  };
+  using Slot = DeltaHistorySlot;
   void store(const PostureRecord& record);
 
   int joint_count_ = 52;
