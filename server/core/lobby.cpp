@@ -626,6 +626,15 @@ void Lobby::onTimedOut(MemberId member, double now, Effects& fx) {
 }
 
 void Lobby::update(double now, Effects& fx) {
+  // A pause of the server is nobody's slowness: join and upload clocks skip it.
+  if (now - last_update_ > kStallSeconds) {
+    const double pause = now - last_update_;
+    for (auto& [conn, c] : connections_) {
+      c.opened_at += pause;
+      c.upload_progress_at += pause;
+    }
+  }
+  last_update_ = now;
   std::vector<ConnId> late;
   std::vector<ConnId> stalled;
   for (const auto& [conn, c] : connections_) {

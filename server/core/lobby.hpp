@@ -64,7 +64,9 @@ class Lobby {
                Effects& fx);
   // A room reports a member silent past the timeout: it is told so and removed.
   void onTimedOut(MemberId member, double now, Effects& fx);
-  // Closes connections that have not joined within the join timeout.
+  // Closes connections that have not joined within the join timeout, and uploads that
+  // stalled. Call every few hundred ms; a longer gap is a pause of the server, which the
+  // join and upload clocks skip.
   void update(double now, Effects& fx);
   // Tells every connection the server is shutting down and closes it.
   void shutdown(double now, Effects& fx);
@@ -170,6 +172,8 @@ class Lobby {
   AvatarStore store_;
   std::uint64_t upload_bytes_in_flight_ = 0;
   std::uint64_t joins_accepted_ = 0;
+  static constexpr double kStallSeconds = 1.0;  // update() gaps longer than this are pauses
+  double last_update_ = 0.0;
   // The one connection uploading each avatar hash; later joins with that hash wait for it.
   std::unordered_map<std::string, ConnId> uploader_of_;
   DropLog drops_{"lobby"};

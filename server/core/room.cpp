@@ -30,7 +30,8 @@ Room::Room(RoomId id, std::string name, const RoomSettings& settings, double now
       tick_interval_(1.0 / settings.tick_rate_hz),
       next_tick_(now + 1.0 / settings.tick_rate_hz),
       world_(settings.world),
-      drops_(fmt::format("room '{}'", name_)) {}
+      drops_(fmt::format("room '{}'", name_)),
+      last_update_(now) {}
 
 Room::Member* Room::find(std::uint32_t member_id) {
   for (Member& m : members_) {
@@ -245,6 +246,17 @@ double Room::nextWakeTime() const {
 void Room::update(double now, Effects& fx) {
   ticked_ = false;
   if (forward_pending_ && now >= next_forward_) forward(now, fx);
+
+  // A pause of the server (a stopped process, a starved thread: update() runs at least
+  // every 0.1 s otherwise) is not the members' silence: what they sent meanwhile is still
+  // queued. Their silence clocks skip the pause.
+  if (now - last_update_ > kStallSeconds) {
+    const double pause = now - last_update_;
+    spdlog::warn("room '{}': the server paused for {:.1f} s; members' timeouts restart", name_,
+                 pause);
+    for (Member& m : members_) m.last_heard += pause;
+  }
+  last_update_ = now;
 
   // Timeouts: members silent too long are reported once; the lobby removes them.
   for (Member& m : members_) {

@@ -79,7 +79,8 @@ class Room {
   // world and sends each bound member the world's datagrams (prop states, interaction
   // list); reports members silent for longer than the timeout (once each, in
   // fx.timed_out). Missed ticks are skipped, not replayed. Call at least at the tick
-  // rate, and at nextWakeTime().
+  // rate, and at nextWakeTime(). A gap of more than a second between calls is a pause of
+  // the server, not silence of its members: their timeouts restart after it.
   void update(double now, Effects& fx);
 
   // Server time of the next due tick, and of the last one (-1 before the first).
@@ -145,6 +146,8 @@ class Room {
   double next_forward_ = 0.0;
   double last_forward_ = -1e300;
   bool ticked_ = false;
+  static constexpr double kStallSeconds = 1.0;  // update() gaps longer than this are pauses
+  double last_update_;
   bool interest_dirty_ = true;
   std::vector<std::uint8_t> interest_;  // [recipient * n + source]: divisor (0 for self)
   std::vector<std::pair<float, int>> scratch_order_;
