@@ -1,5 +1,6 @@
 #include "server/shell/server_shell.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstring>
@@ -84,6 +85,7 @@ ServerShell::ServerShell(asio::io_context& io, const ServerConfig& config)
       acceptor_(lobby_strand_),
       lobby_timer_(lobby_strand_),
       stats_timer_(lobby_strand_),
+      accept_timer_(lobby_strand_),
       lobby_(config, 0),
       udp_(io),
       udp_buffer_(65536) {}
@@ -172,18 +174,36 @@ void ServerShell::armStatsTimer() {
   });
 }
 
+void ServerShell::acceptFailed(const boost::system::error_code& ec) {
+  // Out of file descriptors (EMFILE) and the like last a while: retrying at once only
+  // spins. Wait, from 50 ms doubling to 1 s, and log at most every 5 s with a count.
+  ++accept_failures_;
+  const double t = now();
+  if (t - accept_logged_at_ >= 5.0) {
+    spdlog::warn("accept failed: {} ({} failures since the last report); retrying in {:.0f} ms",
+                 ec.message(), accept_failures_, 1e3 * std::max(0.05, accept_backoff_s_));
+    accept_logged_at_ = t;
+    accept_failures_ = 0;
+  }
+  accept_backoff_s_ = std::clamp(accept_backoff_s_ * 2.0, 0.05, 1.0);
+  accept_timer_.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(accept_backoff_s_)));
+  accept_timer_.async_wait([this](const boost::system::error_code& wait_ec) {
+    if (wait_ec || stopping_) return;
+    accept();
+  });
+}
+
 void ServerShell::accept() {
   acceptor_.async_accept(
       asio::make_strand(io_),
       asio::bind_executor(
           lobby_strand_, [this](const boost::system::error_code& ec, asio::ip::tcp::socket socket) {
             if (ec) {
-              if (ec != asio::error::operation_aborted && !stopping_) {
-                spdlog::warn("accept failed: {}", ec.message());
-                accept();
-              }
+              if (ec != asio::error::operation_aborted && !stopping_) acceptFailed(ec);
               return;
             }
+            accept_backoff_s_ = 0.0;
             if (stopping_) return;
             auto session = std::make_shared<TcpSession>(std::move(socket), next_conn_++);
             boost::system::error_code ignored;
@@ -529,6 +549,7 @@ void ServerShell::stop() {
     acceptor_.close(ignored);
     lobby_timer_.cancel();
     stats_timer_.cancel();
+    accept_timer_.cancel();
     // Tell everyone, then close (each session closes after its last write).
     Effects fx;
     guarded("shutdown", [&] { lobby_.shutdown(now(), fx); });

@@ -67,6 +67,8 @@ class ServerShell {
   void armLobbyTimer();
   void armStatsTimer();
   void accept();
+  // After a failed accept: retry after a growing wait, logging at a bounded rate.
+  void acceptFailed(const boost::system::error_code& ec);
   void read(std::shared_ptr<TcpSession> s);
   void write(std::shared_ptr<TcpSession> s);
   void receiveDatagram();
@@ -85,6 +87,10 @@ class ServerShell {
   asio::ip::tcp::acceptor acceptor_;
   asio::steady_timer lobby_timer_;
   asio::steady_timer stats_timer_;
+  asio::steady_timer accept_timer_;
+  double accept_backoff_s_ = 0.0;      // lobby strand: the current wait after failures
+  double accept_logged_at_ = -1e300;   // ... the last report
+  std::uint64_t accept_failures_ = 0;  // ... failures since it
   LoadStats load_;
   Lobby lobby_;                                                       // lobby strand only
   std::unordered_map<ConnId, std::shared_ptr<TcpSession>> sessions_;  // lobby strand only
