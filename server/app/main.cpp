@@ -61,7 +61,14 @@ int main(int argc, char** argv) {
   }
   if (port >= 0) config->port = static_cast<std::uint16_t>(port);
   if (!bind.empty()) config->bind_address = bind;
-  if (!log_level.empty()) config->log_level = log_level;
+  if (!log_level.empty()) {
+    // spdlog reads an unknown name as "off": refuse it rather than go silent.
+    if (log_level != "off" && spdlog::level::from_str(log_level) == spdlog::level::off) {
+      spdlog::error("--log-level '{}': expected trace, debug, info, warn, error or off", log_level);
+      return 2;
+    }
+    config->log_level = log_level;
+  }
   spdlog::set_level(spdlog::level::from_str(config->log_level));
 
   // Sockets, then the address line (tests and scripts parse it).
