@@ -148,7 +148,7 @@ void Lobby::handleMessage(ConnId conn, Connection& c, std::span<const std::uint8
     cost = 0.0;
   } else if (msg.body_case() == control::ClientMessage::kAvatarRequest) {
     if (const StoredAvatar* a = store_.find(msg.avatar_request().hash())) {
-      cost += std::floor(static_cast<double>(a->bytes->size()) / kMiB);
+      cost += std::ceil(static_cast<double>(a->bytes->size()) / kMiB);
     }
   }
   if (cost > 0.0 && !c.control.take(now, cost)) {

@@ -14,8 +14,8 @@
 //
 // Limits against floods (ServerConfig [limits]): control messages per connection through
 // a token bucket (control_rate_hz sustained, control_burst at once; an AvatarRequest
-// costs one more token per MiB it makes the server send; avatar chunks of the offered
-// upload are free, bounded by the offered size instead): a faster sender is dropped with
+// costs one more token per MiB or part of one it makes the server send; avatar chunks of the
+// offered upload are free, bounded by the offered size instead): a faster sender is dropped with
 // RATE_LIMITED. Upload memory: a join whose avatar must be uploaded reserves its offered
 // size against max_upload_bytes_total (refused with SERVER_FULL beyond), released when the
 // upload ends either way; an upload without progress for upload_stall_timeout_s drops its

@@ -111,12 +111,28 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
   VISTEL_TRY(
       limits.number("max_upload_bytes_total", c.max_upload_bytes_total, 1024, 16.0 * (1ull << 30)));
   VISTEL_TRY(limits.number("upload_stall_timeout_s", c.upload_stall_timeout_s, 0.1, 3600));
+  VISTEL_TRY(limits.number("max_queued_bytes_per_connection", c.max_queued_bytes_per_connection,
+                           4096, 16.0 * (1ull << 30)));
+  VISTEL_TRY(
+      limits.number("max_queued_bytes_total", c.max_queued_bytes_total, 4096, 64.0 * (1ull << 30)));
   VISTEL_TRY(limits.number("control_rate_hz", c.control_rate_hz, 0.1, 100000));
   VISTEL_TRY(limits.number("control_burst", c.control_burst, 1, 1000000));
   VISTEL_TRY(
       limits.number("max_primitives_per_avatar", c.max_primitives_per_avatar, 1, kMaxPrimitives));
   VISTEL_TRY(limits.number("max_primitive_extent_m", c.max_primitive_extent_m, 0.01, 100));
   VISTEL_TRY(limits.checkUnknown());
+  if (c.max_queued_bytes_per_connection < c.max_avatar_bytes + c.max_frame_bytes) {
+    return fail(
+        "{}: [limits] max_queued_bytes_per_connection ({}) must hold an avatar and a frame "
+        "({} + {})",
+        source_name, c.max_queued_bytes_per_connection, c.max_avatar_bytes, c.max_frame_bytes);
+  }
+  if (c.max_queued_bytes_total < c.max_queued_bytes_per_connection) {
+    return fail(
+        "{}: [limits] max_queued_bytes_total ({}) is below max_queued_bytes_per_connection "
+        "({})",
+        source_name, c.max_queued_bytes_total, c.max_queued_bytes_per_connection);
+  }
   if (c.avatar_chunk_bytes + 1024 > c.max_frame_bytes) {
     return fail(
         "{}: [limits] avatar_chunk_bytes ({}) must be at least 1024 below max_frame_bytes "

@@ -44,6 +44,9 @@ struct ServerConfig {
   std::size_t max_avatar_bytes = 16u << 20;        // one avatar file
   std::size_t avatar_chunk_bytes = 64u << 10;      // AvatarChunk.data, both directions (<= 512 KiB)
   std::size_t max_upload_bytes_total = 64u << 20;  // unfinished uploads, all connections
+  // Control bytes waiting to be written: a peer that stops reading is dropped past either.
+  std::size_t max_queued_bytes_per_connection = 24u << 20;  // >= an avatar and a frame
+  std::size_t max_queued_bytes_total = 256u << 20;
   double upload_stall_timeout_s = 15.0;  // an upload without a chunk for this long is dropped
   double control_rate_hz = 20.0;         // control messages per second per connection,
   int control_burst = 100;               // sustained, and in a burst (avatar chunks are free)

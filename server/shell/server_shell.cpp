@@ -19,7 +19,6 @@ namespace vistel::server {
 namespace {
 
 constexpr std::size_t kReadChunk = 16u << 10;
-constexpr std::size_t kMaxQueuedWriteBytes = 64u << 20;  // a peer that stops reading is cut
 
 wire::Endpoint toWire(const asio::ip::udp::endpoint& e) {
   const asio::ip::address a = e.address();
@@ -231,7 +230,7 @@ void ServerShell::read(std::shared_ptr<TcpSession> s) {
               s->closed = true;
               boost::system::error_code ignored;
               s->socket.close(ignored);
-              sessions_.erase(s->conn);
+              forget(*s);
             } else {
               guarded("control frame", [&] {
                 lobby_.onStreamBytes(s->conn, std::span(s->read_buffer.data(), n), now(), fx);
@@ -250,7 +249,7 @@ void ServerShell::write(std::shared_ptr<TcpSession> s) {
       boost::system::error_code ignored;
       s->socket.shutdown(asio::ip::tcp::socket::shutdown_both, ignored);
       s->socket.close(ignored);
-      sessions_.erase(s->conn);
+      forget(*s);
       // Once stopping, the last closed connection ends the wait for stragglers.
       if (stopping_ && sessions_.empty()) lobby_timer_.cancel();
     }
@@ -263,7 +262,8 @@ void ServerShell::write(std::shared_ptr<TcpSession> s) {
           lobby_strand_, [this, s](const boost::system::error_code& ec, std::size_t /*n*/) {
             s->writing = false;
             if (s->closed) return;
-            s->queued_bytes -= s->queue.front().size();
+            s->queued_bytes -= std::min(s->queued_bytes, s->queue.front().size());
+            queued_total_ -= std::min(queued_total_, s->queue.front().size());
             s->queue.pop_front();
             if (ec) {
               Effects fx;
@@ -271,12 +271,36 @@ void ServerShell::write(std::shared_ptr<TcpSession> s) {
               s->closed = true;
               boost::system::error_code ignored;
               s->socket.close(ignored);
-              sessions_.erase(s->conn);
+              forget(*s);
               applyLobbyEffects(fx);
               return;
             }
             write(s);
           }));
+}
+
+void ServerShell::forget(TcpSession& s) {
+  // The queue itself goes with the session (a write in flight still uses its front).
+  queued_total_ -= std::min(queued_total_, s.queued_bytes);
+  s.queued_bytes = 0;
+  sessions_.erase(s.conn);
+}
+
+void ServerShell::dropSlowPeer(TcpSession& s, std::string_view limit) {
+  spdlog::warn(
+      "connection {}: peer is not reading ({} bytes queued, {} bytes in all; the {} "
+      "limit): dropping it",
+      s.conn, s.queued_bytes, queued_total_, limit);
+  Effects drop_fx;
+  lobby_.onDisconnect(s.conn, now(), drop_fx);
+  // What is being written stays (its buffer is in use); the rest goes.
+  while (s.queue.size() > (s.writing ? 1u : 0u)) {
+    queued_total_ -= std::min(queued_total_, s.queue.back().size());
+    s.queued_bytes -= std::min(s.queued_bytes, s.queue.back().size());
+    s.queue.pop_back();
+  }
+  s.close_after_flush = true;
+  applyLobbyEffects(drop_fx);
 }
 
 void ServerShell::applyLobbyEffects(Effects& fx) {
@@ -286,16 +310,22 @@ void ServerShell::applyLobbyEffects(Effects& fx) {
     if (it == sessions_.end()) continue;
     TcpSession& s = *it->second;
     s.queued_bytes += f.bytes.size();
+    queued_total_ += f.bytes.size();
     s.queue.push_back(std::move(f.bytes));
-    if (s.queued_bytes > kMaxQueuedWriteBytes && !s.close_after_flush) {
-      spdlog::warn("connection {}: peer is not reading ({} bytes queued): dropping it", s.conn,
-                   s.queued_bytes);
-      Effects drop_fx;
-      lobby_.onDisconnect(s.conn, now(), drop_fx);
-      s.queue.clear();
-      s.queued_bytes = 0;
-      s.close_after_flush = true;
-      applyLobbyEffects(drop_fx);
+    if (s.queued_bytes > config_.max_queued_bytes_per_connection && !s.close_after_flush) {
+      dropSlowPeer(s, "per-connection");
+    }
+    // Past the server's total, the peer holding the most goes (it is not reading).
+    while (queued_total_ > config_.max_queued_bytes_total) {
+      TcpSession* largest = nullptr;
+      for (auto& [conn, other] : sessions_) {
+        if (!other->close_after_flush &&
+            (largest == nullptr || other->queued_bytes > largest->queued_bytes)) {
+          largest = other.get();
+        }
+      }
+      if (largest == nullptr || largest->queued_bytes == 0) break;
+      dropSlowPeer(*largest, "total");
     }
   }
   for (ConnId conn : fx.closes) {

@@ -65,6 +65,11 @@ class ServerShell {
 
   double now() const;
   void armLobbyTimer();
+  // Takes a closed session out of the map and its queued bytes out of the total.
+  void forget(TcpSession& s);
+  // A peer whose queue passed a limit ("per-connection" or "total"): its member is
+  // removed, what it has queued dropped (but a write in flight), the connection closed.
+  void dropSlowPeer(TcpSession& s, std::string_view limit);
   void armStatsTimer();
   void accept();
   // After a failed accept: retry after a growing wait, logging at a bounded rate.
@@ -95,6 +100,7 @@ class ServerShell {
   Lobby lobby_;                                                       // lobby strand only
   std::unordered_map<ConnId, std::shared_ptr<TcpSession>> sessions_;  // lobby strand only
   ConnId next_conn_ = 1;
+  std::size_t queued_total_ = 0;  // lobby strand: bytes queued on every connection
 
   std::mutex udp_mutex_;  // every operation on udp_
   asio::ip::udp::socket udp_;
