@@ -323,6 +323,7 @@ void ClientSession::sendHello(double now) {
   hello.header.member_id = member_id_;
   hello.header.key = key_;
   hello.attempt = ++hello_attempt_;
+  hello.cookie = hello_cookie_;
   wire::write(hello, outbox_.datagrams.emplace_back());
   next_hello_ = now + settings_.hello_interval_s;
 }
@@ -351,6 +352,14 @@ void ClientSession::onDatagram(std::span<const std::uint8_t> datagram, double no
       return;
     }
     last_server_datagram_ = now;
+    if (ack.cookie != 0) {
+      // A challenge: our address is bound once we echo it (WIRE.md §3.2).
+      if (state_ == SessionState::kHandshaking && ack.cookie != hello_cookie_) {
+        hello_cookie_ = ack.cookie;
+        sendHello(now);
+      }
+      return;
+    }
     if (state_ == SessionState::kHandshaking) {
       state_ = SessionState::kLive;
       state_since_ = now;

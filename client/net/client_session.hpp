@@ -243,6 +243,7 @@ class ClientSession {
   double last_server_datagram_ = 0.0;
 
   std::uint32_t hello_attempt_ = 0;
+  std::uint64_t hello_cookie_ = 0;  // the server's challenge to our address (0: none yet)
   double next_hello_ = 0.0;
 
   std::uint32_t ping_id_ = 0;

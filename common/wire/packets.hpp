@@ -48,6 +48,7 @@ struct ClientHeader {
 struct HelloPacket {
   ClientHeader header;
   std::uint32_t attempt = 0;  // the client's hello counter, echoed in the ack
+  std::uint64_t cookie = 0;   // 0, or the challenge the server sent to this address
 };
 
 // A Posture datagram whose record is a keyframe: the flags byte kPostureKeyframeFlags, then
@@ -65,9 +66,12 @@ struct PingPacket {
   double client_time = 0.0;  // sender's clock, seconds (echoed)
 };
 
+// cookie != 0: a challenge (the address is not bound yet: send the hello again with this
+// cookie); 0: the address is bound.
 struct HelloAckPacket {
   std::uint32_t member_id = 0;
   std::uint32_t attempt = 0;
+  std::uint64_t cookie = 0;
 };
 
 struct PongPacket {
@@ -122,7 +126,8 @@ bool serialize(Stream& s, ClientHeader& h, PacketType type) {
 
 template <typename Stream>
 bool serialize(Stream& s, HelloPacket& p) {
-  return serialize(s, p.header, PacketType::kHello) && serializeU32(s, p.attempt);
+  return serialize(s, p.header, PacketType::kHello) && serializeU32(s, p.attempt) &&
+         serializeU64(s, p.cookie);
 }
 
 template <typename Stream>
@@ -141,7 +146,7 @@ bool serialize(Stream& s, PingPacket& p) {
 template <typename Stream>
 bool serialize(Stream& s, HelloAckPacket& p) {
   return serializeKind(s, PacketType::kHelloAck) && serializeU32(s, p.member_id) &&
-         serializeU32(s, p.attempt);
+         serializeU32(s, p.attempt) && serializeU64(s, p.cookie);
 }
 
 template <typename Stream>

@@ -576,21 +576,42 @@ void Lobby::onHello(std::span<const std::uint8_t> datagram, const wire::Endpoint
                 fmt::format("member {:#x} from {}", hello.header.member_id, from.toString()));
     return;
   }
-  if (m->bound && !(m->endpoint == from)) {
-    drops_.drop(now, "hello from a second endpoint",
-                fmt::format("member {:#x} bound to {}, hello from {}", m->id.value,
-                            m->endpoint.toString(), from.toString()));
-    return;
-  }
-  if (!m->bound) {
+  // An address is bound only once it has shown that it receives what is sent to it: the
+  // first hello from it gets a challenge (a random cookie, 18 bytes for the 26 of the
+  // hello), and only a hello echoing that cookie binds it. So a forged source address gets
+  // one small datagram and no stream. A bound member's hello from a new address (NAT
+  // rebinding) goes through the same check and then moves the member there.
+  const bool at_bound_address = m->bound && m->endpoint == from;
+  if (!at_bound_address) {
+    if (hello.cookie == 0 || hello.cookie != m->challenge || !(m->challenged == from)) {
+      m->challenged = from;
+      m->challenge = newKey();
+      wire::HelloAckPacket challenge;
+      challenge.member_id = m->id.value;
+      challenge.attempt = hello.attempt;
+      challenge.cookie = m->challenge;
+      OutDatagram& out = fx.datagrams.emplace_back();
+      out.to = from;
+      wire::write(challenge, out.bytes);
+      return;
+    }
     auto taken = member_by_endpoint_.find(from);
     if (taken != member_by_endpoint_.end()) {
       drops_.drop(now, "endpoint already bound",
                   fmt::format("{} belongs to member {:#x}", from.toString(), taken->second));
       return;
     }
+    if (m->bound) {
+      spdlog::info("lobby: member {:#x} '{}' moves from {} to {}", m->id.value, m->name,
+                   m->endpoint.toString(), from.toString());
+      member_by_endpoint_.erase(m->endpoint);
+    } else {
+      spdlog::info("lobby: member {:#x} '{}' bound UDP endpoint {}", m->id.value, m->name,
+                   from.toString());
+    }
     m->bound = true;
     m->endpoint = from;
+    m->challenge = 0;
     member_by_endpoint_[from] = m->id.value;
     RoomCommand cmd;
     cmd.kind = RoomCommand::Kind::kBindEndpoint;
@@ -598,10 +619,8 @@ void Lobby::onHello(std::span<const std::uint8_t> datagram, const wire::Endpoint
     cmd.member = m->id;
     cmd.endpoint = from;
     fx.room_commands.push_back(cmd);
-    spdlog::info("lobby: member {:#x} '{}' bound UDP endpoint {}", m->id.value, m->name,
-                 from.toString());
   }
-  // Ack (10 bytes for an 18-byte hello; repeated hellos get repeated acks).
+  // Bound here: ack (18 bytes for a 26-byte hello; repeated hellos get repeated acks).
   wire::HelloAckPacket ack;
   ack.member_id = m->id.value;
   ack.attempt = hello.attempt;

@@ -86,6 +86,11 @@ class Lobby {
   std::vector<PropId> propsOf(std::string_view room) const;
   // The room of a live member.
   std::optional<RoomId> roomOf(MemberId member) const;
+  // A live member's UDP key (0 for an unknown member): for tests that play its client.
+  std::uint64_t keyOf(std::uint32_t member) const {
+    auto it = members_.find(member);
+    return it == members_.end() ? 0 : it->second.key;
+  }
 
  private:
   struct Connection {
@@ -112,6 +117,8 @@ class Lobby {
     int joint_count = 0;
     bool bound = false;
     wire::Endpoint endpoint;
+    wire::Endpoint challenged;    // the address the last challenge went to
+    std::uint64_t challenge = 0;  // ... and its cookie (0: none)
     double last_spawn = -1e300;
   };
   struct PropRecord {

@@ -66,8 +66,11 @@ TEST(SimulatedSession, TwoBotsAndAClientAtFivePercentLoss) {
     std::printf("[ measure  ] %s: %llu postures received of %llu sent, %.2f Hz (sent at %.0f Hz)\n",
                 bot, static_cast<unsigned long long>(m.postures_received),
                 static_cast<unsigned long long>(sent_wave), m.rateHz(), kRate);
-    EXPECT_GE(m.rateHz(), 0.9 * kRate) << bot;
-    EXPECT_GE(static_cast<double>(m.postures_received), 0.9 * static_cast<double>(sent_wave));
+    // Each posture is forwarded once, as it arrives (no longer repeated at every tick until
+    // the next replaces it): 5% loss each way leaves 90.25% on average; 601 postures give a
+    // standard deviation of 1.2 points.
+    EXPECT_GE(m.rateHz(), 0.86 * kRate) << bot;
+    EXPECT_GE(static_cast<double>(m.postures_received), 0.86 * static_cast<double>(sent_wave));
   }
   // Latency: the 20-30 ms of the up link plus up to one tick, plus the down link.
   std::printf("[ measure  ] latency mean %.2f ms, p99 %.2f ms over %llu postures\n",

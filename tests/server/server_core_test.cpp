@@ -407,3 +407,49 @@ TEST(ServerConfig, DefaultsParseAndErrorsNameTheKey) {
 
 }  // namespace
 }  // namespace vistel::server
+
+namespace vistel::server {
+namespace {
+
+// A member that forges its hello's source address (issue 20, finding 3) cannot point the
+// room's stream at a third party: the forged address gets one challenge, smaller than the
+// hello, and nothing after it; only an address that echoes its challenge is bound.
+TEST(HelloChallenge, AForgedSourceAddressGetsOneSmallChallengeAndNoStream) {
+  SimNetwork net(testConfig(), 61);
+  const auto avatar = test::encodeSynthetic(test::makeCollidingAvatar());
+  const auto alice = net.addClient(test::sessionFor("lab", "alice", avatar, 5));
+  const auto bob = net.addClient(test::sessionFor("lab", "bob", avatar, 5));
+  net.connect(alice);
+  net.connect(bob);
+  net.advance(0.3);
+  ASSERT_EQ(net.session(alice).state(), SessionState::kLive);
+  // Alice knows her own id and key; she sends a hello as if from the victim.
+  const wire::Endpoint victim = wire::Endpoint::ipv4(0x7F000042u, 5555);
+  wire::HelloPacket hello;
+  hello.header = {net.session(alice).memberId(), 0};
+  hello.header.key = net.server().lobby().keyOf(net.session(alice).memberId());
+  hello.attempt = 1;
+  std::vector<std::uint8_t> bytes;
+  wire::write(hello, bytes);
+  net.injectDatagram(bytes, victim);
+  double next = net.now();
+  net.advance(1.0, 0.001, [&](double now) {
+    if (now + 1e-9 < next) return;
+    next += 1.0 / 30.0;
+    for (std::size_t i : {alice, bob}) {
+      net.session(i).sendPosture(test::syntheticPosture(now), net.localTime(i));
+    }
+  });
+  const auto& to_victim = net.rawDatagrams(victim);
+  ASSERT_EQ(to_victim.size(), 1u);
+  EXPECT_LT(to_victim[0].size(), bytes.size());
+  wire::HelloAckPacket challenge;
+  ASSERT_TRUE(wire::read(to_victim[0], challenge));
+  EXPECT_NE(challenge.cookie, 0u);
+  // Alice's own stream goes on where she really is.
+  EXPECT_EQ(net.session(alice).state(), SessionState::kLive);
+  EXPECT_GT(net.session(bob).stats().members.at("alice").postures_received, 20u);
+}
+
+}  // namespace
+}  // namespace vistel::server
