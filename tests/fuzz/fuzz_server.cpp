@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <span>
 #include <string>
 #include <vector>
@@ -39,6 +40,12 @@
 #include "tests/net/implicit_avatar.hpp"
 
 namespace {
+
+// The last challenge each address got (WIRE.md §3.2), so that scripted hellos can bind.
+std::map<std::string, std::uint64_t>& challenges() {
+  static std::map<std::string, std::uint64_t> cookies;
+  return cookies;
+}
 
 using namespace vistel;
 using fuzz::check;
@@ -262,6 +269,7 @@ void drain(server::ServerCore& core, std::array<Peer, kPeers>& peers, double now
       if (*type == wire::PacketType::kHelloAck) {
         wire::HelloAckPacket p;
         check(wire::read(d.bytes, p), "HelloAck reads back");
+        challenges()[d.to.toString()] = p.cookie;  // the next hello from there echoes it
       } else if (*type == wire::PacketType::kPong) {
         wire::PongPacket p;
         check(wire::read(d.bytes, p), "Pong reads back");
@@ -345,7 +353,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         break;
       case kHello:
         datagram.clear();
-        wire::write(wire::HelloPacket{{peer.member_id, peer.key}, script.u8()}, datagram);
+        wire::write(
+            wire::HelloPacket{
+                {peer.member_id, peer.key}, script.u8(), challenges()[peer.endpoint.toString()]},
+            datagram);
         core.onDatagram(datagram, peer.endpoint, now);
         break;
       case kPosture: {

@@ -81,11 +81,11 @@ std::vector<std::uint8_t> addPacket(std::vector<fuzz::Seed>& seeds, const char* 
 std::vector<fuzz::Seed> makeSeeds() {
   std::vector<fuzz::Seed> seeds;
   const ClientHeader header{7, 0x0123456789abcdefull};
-  addPacket(seeds, "hello.bin", HelloPacket{header, 3});
+  addPacket(seeds, "hello.bin", HelloPacket{header, 3, 0x0102030405060708ull});
   addPacket(seeds, "posture_5.bin", PosturePacket{header, sampleRecord(5, 42)});
   addPacket(seeds, "posture_52.bin", PosturePacket{header, sampleRecord(52, 65535)});
   addPacket(seeds, "ping.bin", PingPacket{header, 9, 1.25});
-  addPacket(seeds, "hello_ack.bin", HelloAckPacket{7, 3});
+  addPacket(seeds, "hello_ack.bin", HelloAckPacket{7, 3, 0});
   const std::vector<std::uint8_t> pong = addPacket(seeds, "pong.bin", PongPacket{9, 1.25, 100.5});
 
   // A snapshot of two members, a prop and a two-part interaction list's first part.

@@ -86,7 +86,7 @@ TEST(Packets, RoundTripsAndPrefixes) {
   ping.client_time = 12.5;
   expectPrefixesRejected<PingPacket>(bytesOf(ping));
 
-  HelloAckPacket ack{7, 9};
+  HelloAckPacket ack{7, 9, 11};
   expectPrefixesRejected<HelloAckPacket>(bytesOf(ack));
 
   PongPacket pong{5, 12.5, 99.25};
