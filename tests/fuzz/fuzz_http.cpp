@@ -25,7 +25,7 @@ using fuzz::check;
 std::vector<fuzz::Seed> makeSeeds() {
   return {
       fuzz::textSeed("get_metrics",
-                     "GET /metrics HTTP/1.1\r\nHost: 10.0.0.1:9100\r\n"
+                     "GET /metrics HTTP/1.1\r\nHost: 127.0.0.1:9100\r\n"
                      "User-Agent: Prometheus/2.45\r\nAccept: text/plain\r\n\r\n"),
       fuzz::textSeed("head_readyz", "HEAD /readyz?x=1 HTTP/1.0\r\n\r\n"),
       fuzz::textSeed("absolute", "GET http://h:1/healthz HTTP/1.1\r\nHost: h:1\r\n\r\n"),
