@@ -584,8 +584,12 @@ void Lobby::onHello(std::span<const std::uint8_t> datagram, const wire::Endpoint
   const bool at_bound_address = m->bound && m->endpoint == from;
   if (!at_bound_address) {
     if (hello.cookie == 0 || hello.cookie != m->challenge || !(m->challenged == from)) {
-      m->challenged = from;
-      m->challenge = newKey();
+      // One challenge per address until it is answered: hellos retried while the first
+      // challenge travels get the same cookie, so a slow link cannot chase a new one.
+      if (m->challenge == 0 || !(m->challenged == from)) {
+        m->challenged = from;
+        m->challenge = newKey();
+      }
       wire::HelloAckPacket challenge;
       challenge.member_id = m->id.value;
       challenge.attempt = hello.attempt;
