@@ -604,15 +604,7 @@ Status ClientSession::sceneInteractions(std::span<const BodyView> bodies, Intera
     for (std::size_t b = 0; b < bodies.size(); ++b) {
       const BodyView& body = bodies[b];
       if (body.posed == nullptr || body.graph == nullptr) continue;
-      for (const auto& cp : body.graph->collide_pairs) {
-        if (std::max(cp[0], cp[1]) >= body.posed->items.size()) continue;  // refused below
-        const PosedPrimitive& p = body.posed->items[cp[0]];
-        const PosedPrimitive& q = body.posed->items[cp[1]];
-        if (p.collides && q.collides && boundsOverlap(p, q)) {
-          const auto i = static_cast<std::uint16_t>(b);
-          out.pairs.push_back({i, cp[0], i, cp[1]});
-        }
-      }
+      appendSelfInteractions(*body.graph, *body.posed, static_cast<std::uint16_t>(b), out.pairs);
     }
   }
   // Canonical order, then the same checks a locally built list would pass.

@@ -34,6 +34,17 @@ bool allowed(std::span<const BodyView> bodies, int ba, int pa, int bb, int pb) {
 
 }  // namespace
 
+void appendSelfInteractions(const CombinationGraph& graph, const PosedPrimitives& posed,
+                            std::uint16_t body, std::vector<Interaction>& pairs) {
+  for (const auto& cp : graph.collide_pairs) {
+    if (std::max(cp[0], cp[1]) >= posed.items.size()) continue;
+    const PosedPrimitive& p = posed.items[cp[0]];
+    const PosedPrimitive& q = posed.items[cp[1]];
+    if (p.collides && q.collides && boundsOverlap(p, q))
+      pairs.push_back({body, cp[0], body, cp[1]});
+  }
+}
+
 bool boundsOverlap(const PosedPrimitive& p, const PosedPrimitive& q) {
   if (p.bounds.max.x < q.bounds.min.x || q.bounds.max.x < p.bounds.min.x ||
       p.bounds.max.y < q.bounds.min.y || q.bounds.max.y < p.bounds.min.y ||
@@ -102,15 +113,8 @@ void buildInteractions(std::span<const BodyView> bodies, InteractionScratch& s,
       s.body_live[b] = 1;
     }
     s.body_boxes[b] = box;
-    const CombinationGraph* graph = bodies[b].graph;
-    if (graph == nullptr || !self_contact) continue;
-    const auto body = static_cast<std::uint16_t>(b);
-    for (const auto& cp : graph->collide_pairs) {
-      const PosedPrimitive& p = posed.items[cp[0]];
-      const PosedPrimitive& q = posed.items[cp[1]];
-      if (p.collides && q.collides && boundsOverlap(p, q)) {
-        out.pairs.push_back({body, cp[0], body, cp[1]});
-      }
+    if (bodies[b].graph != nullptr && self_contact) {
+      appendSelfInteractions(*bodies[b].graph, posed, static_cast<std::uint16_t>(b), out.pairs);
     }
   }
 
@@ -181,11 +185,7 @@ void buildInteractions(std::span<const BodyView> bodies, InteractionScratch& s,
 void buildInteractions(const CombinationGraph& graph, const PosedPrimitives& posed,
                        InteractionList& out) {
   out.pairs.clear();
-  for (const auto& cp : graph.collide_pairs) {
-    const PosedPrimitive& p = posed.items[cp[0]];
-    const PosedPrimitive& q = posed.items[cp[1]];
-    if (p.collides && q.collides && boundsOverlap(p, q)) out.pairs.push_back({0, cp[0], 0, cp[1]});
-  }
+  appendSelfInteractions(graph, posed, 0, out.pairs);
   finalizeInteractions(out, 1);
 }
 

@@ -81,6 +81,12 @@ void buildInteractions(std::span<const BodyView> bodies, InteractionScratch& scr
 void buildInteractions(const CombinationGraph& graph, const PosedPrimitives& posed,
                        InteractionList& out);
 
+// Appends body `body`'s own pairs (self-contact: its graph's collide pairs whose
+// bounding volumes overlap) to pairs, unordered. A pair naming a primitive the posed set
+// lacks is skipped (validateInteractions refuses such a body's lists anyway).
+void appendSelfInteractions(const CombinationGraph& graph, const PosedPrimitives& posed,
+                            std::uint16_t body, std::vector<Interaction>& pairs);
+
 // Whether two posed primitives' bounding volumes overlap (box, then analytic test).
 bool boundsOverlap(const PosedPrimitive& p, const PosedPrimitive& q);
 

@@ -1,10 +1,7 @@
 // The server out of file descriptors (issue 20, finding 2): with its limit at 48 and 120
 // connections knocking, the accept loop waits and retries instead of spinning, logs a
 // bounded number of lines, and accepts again once descriptors are free.
-#include <arpa/inet.h>
-#include <netinet/in.h>
 #include <sys/resource.h>
-#include <sys/socket.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -15,27 +12,12 @@
 
 #include <gtest/gtest.h>
 
-#include "common/wire/framing.hpp"
-#include "control.pb.h"
 #include "tests/integration/program.hpp"
+#include "tests/integration/raw_control.hpp"
 #include "tests/support/test_support.hpp"
 
 namespace vistel {
 namespace {
-
-int connectTo(std::uint16_t port) {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  if (fd < 0) return -1;
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(port);
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  if (::connect(fd, reinterpret_cast<const sockaddr*>(&a), sizeof a) != 0) {
-    ::close(fd);
-    return -1;
-  }
-  return fd;
-}
 
 int countOf(const std::string& text, const std::string& what) {
   int n = 0;
@@ -61,7 +43,7 @@ TEST(AcceptBackoff, OutOfDescriptorsTheServerWaitsLogsLittleAndRecovers) {
   // descriptors accepting them.
   std::vector<int> fds;
   for (int i = 0; i < 120; ++i) {
-    const int fd = connectTo(port);
+    const int fd = test::connectLoopback(port);
     if (fd >= 0) fds.push_back(fd);
   }
   EXPECT_GT(fds.size(), 60u);
@@ -76,33 +58,14 @@ TEST(AcceptBackoff, OutOfDescriptorsTheServerWaitsLogsLittleAndRecovers) {
 
   // Descriptors free again: a join is answered.
   std::this_thread::sleep_for(std::chrono::milliseconds(1200));
-  const int fd = connectTo(port);
+  const int fd = test::connectLoopback(port);
   ASSERT_GE(fd, 0);
-  control::ClientMessage msg;
-  control::Join& join = *msg.mutable_join();
-  join.set_protocol_version(3);
-  join.set_room("after");
-  join.set_name("late");
-  join.set_avatar_hash(std::string(64, 'a'));
-  join.set_avatar_size(1000);
-  const std::string payload = msg.SerializeAsString();
-  std::vector<std::uint8_t> frame;
-  wire::appendFrame(
-      std::span(reinterpret_cast<const std::uint8_t*>(payload.data()), payload.size()), frame);
-  ASSERT_EQ(::send(fd, frame.data(), frame.size(), 0), static_cast<ssize_t>(frame.size()));
-  timeval timeout{5, 0};
-  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
-  std::vector<std::uint8_t> got(4096);
-  const ssize_t n = ::recv(fd, got.data(), got.size(), 0);
+  ASSERT_TRUE(
+      test::sendControl(fd, test::joinRequest("after", "late", std::string(64, 'a'), 1000)));
+  const auto answer = test::receiveControl(fd, 5);
   ::close(fd);
-  ASSERT_GT(n, 4);
-  wire::FrameDecoder decoder(1u << 20);
-  ASSERT_TRUE(decoder.push(std::span(got.data(), static_cast<std::size_t>(n))));
-  auto reply = decoder.next();
-  ASSERT_TRUE(reply.has_value());
-  control::ServerMessage answer;
-  ASSERT_TRUE(answer.ParseFromArray(reply->data(), static_cast<int>(reply->size())));
-  EXPECT_TRUE(answer.has_welcome());
+  ASSERT_TRUE(answer.has_value());
+  EXPECT_TRUE(answer->has_welcome());
   server.signal(SIGINT);
   EXPECT_EQ(server.wait(10.0), 0);
 }
