@@ -1,6 +1,8 @@
-// Benchmarks of the deformable component (issue 4): skinning (LBS, DQS) and Steps 1-3 over
-// the same frames and mesh, the same scene with the mesh subdivided 1x, 4x, 16x, and a
-// brute-force triangle-triangle contact baseline on the same scene.
+// Benchmarks of the deformable component (issue 4): skinning (LBS, DQS, and issue 25's
+// spine lattice and rigid + slerp, whose per-mesh rigs are built once outside the timed
+// loop, as at load) and Steps 1-3 over the same frames and mesh, the same scene with the
+// mesh subdivided 1x, 4x, 16x, and a brute-force triangle-triangle contact baseline on the
+// same scene.
 //
 // Scene: makehuman_game_engine.glb (the default avatar when the shared data is absent)
 // retargeted from 48 consecutive 30 Hz frames of the CMU clip 01_01 (12 for the scaling
@@ -30,6 +32,7 @@
 
 #include "common/anim/posture.hpp"
 #include "common/anim/skinning.hpp"
+#include "common/anim/skinning_rig.hpp"
 #include "common/deform/deform.hpp"
 #include "common/deform/mesh_quality.hpp"
 #include "common/deform/prop.hpp"
@@ -222,11 +225,18 @@ void skinBench(benchmark::State& state, SkinningMethod method) {
   std::vector<glm::mat4> model_xf(nj), skin(nj);
   std::vector<DualQuat> dq(nj);
   std::vector<glm::vec3> pos(nv), nrm(nv);
+  const bool rigged = method == SkinningMethod::kSpineFfd || method == SkinningMethod::kRigidSlerp;
+  const SkinningRig rig = rigged ? makeSkinningRig(sk, s->avatar.skin, method) : SkinningRig{};
+  RigFrame rig_frame = makeRigFrame(rig);
   for (auto _ : state) {
     for (const Posture& posture : s->postures) {
       poseSkeleton(sk, posture, model_xf);
       skinningMatrices(sk, model_xf, skin);
-      skinMesh(s->avatar.skin, method, skin, dq, pos, nrm);
+      if (rigged) {
+        skinMesh(s->avatar.skin, rig, skin, dq, rig_frame, pos, nrm);
+      } else {
+        skinMesh(s->avatar.skin, method, skin, dq, pos, nrm);
+      }
       benchmark::DoNotOptimize(pos.data());
       benchmark::ClobberMemory();
     }
@@ -236,11 +246,13 @@ void skinBench(benchmark::State& state, SkinningMethod method) {
       static_cast<double>(nv) * frames, benchmark::Counter::kIsIterationInvariantRate);
   state.counters["seconds_per_frame"] = benchmark::Counter(
       frames, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
-  state.SetLabel(s->avatar_name);
+  state.SetLabel(rig.warning.empty() ? s->avatar_name : s->avatar_name + " (" + rig.warning + ")");
 }
 
 void BM_Skin_LBS(benchmark::State& state) { skinBench(state, SkinningMethod::kLinear); }
 void BM_Skin_DQS(benchmark::State& state) { skinBench(state, SkinningMethod::kDualQuaternion); }
+void BM_Skin_FFD(benchmark::State& state) { skinBench(state, SkinningMethod::kSpineFfd); }
+void BM_Skin_Slerp(benchmark::State& state) { skinBench(state, SkinningMethod::kRigidSlerp); }
 
 // Steps 1-3 (pose primitives, interaction list, deformation with contact); one benchmark
 // iteration runs every frame of the scene in order (warm starts carry over between frames).
@@ -386,6 +398,8 @@ void BM_TriTri_Scale(benchmark::State& state) {
 
 BENCHMARK(BM_Skin_LBS)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Skin_DQS)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Skin_FFD)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Skin_Slerp)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Deform_Steps123)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Deform_Scale)->Arg(1)->Arg(4)->Arg(16)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_TriTri_Scale)->Arg(1)->Arg(4)->Arg(16)->Unit(benchmark::kMillisecond);

@@ -2,9 +2,11 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <optional>
 #include <set>
 #include <sstream>
 
+#include <fmt/format.h>
 #include <toml++/toml.h>
 
 #include "common/base/embedded.hpp"
@@ -64,6 +66,13 @@ Result<ClientConfig> parseClientConfig(std::string_view toml_text, std::string_v
   VISTEL_CONFIG_TRY(view.number("worker_threads", c.worker_threads, 1, 64));
   VISTEL_CONFIG_TRY(view.number("frame_rate_hz", c.frame_rate_hz, 1, 1000));
   VISTEL_CONFIG_TRY(view.boolean("gpu_skinning", c.gpu_skinning));
+  std::string skinning(skinningMethodName(c.skinning));
+  VISTEL_CONFIG_TRY(view.string("skinning", skinning));
+  if (const std::optional<SkinningMethod> method = parseSkinningMethod(skinning); method) {
+    c.skinning = *method;
+  } else {
+    return view.error("skinning", fmt::format("'{}' is not lbs, dqs, ffd or slerp", skinning));
+  }
   VISTEL_CONFIG_TRY(view.checkUnknown());
   ConfigTable deform(root, "deform", source_name);
   VISTEL_CONFIG_TRY(deform.boolean("enabled", c.deform));

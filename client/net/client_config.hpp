@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "client/net/client_session.hpp"
+#include "common/anim/skinning.hpp"
 #include "common/base/result.hpp"
 #include "common/scene/deform_lod.hpp"
 
@@ -27,6 +28,11 @@ struct ClientConfig {
   int worker_threads = 2;
   double frame_rate_hz = 60.0;  // render (or headless sampling) rate
   bool gpu_skinning = true;     // rigid bodies skinned in the vertex shader
+  // [view] skinning, the rigid component: "lbs", "dqs", "ffd" (the torso by a lattice
+  // along the spine) or "slerp" (rigid + slerp). The vertex shader skins with dqs only:
+  // with any other method bodies are skinned on the CPU (gpu_skinning then applies only to
+  // bodies whose ffd fell back to dqs for want of a spine).
+  SkinningMethod skinning = SkinningMethod::kDualQuaternion;
   // [deform]
   bool deform = true;               // run the deformable component on the drawn bodies
   bool server_interactions = true;  // use the server's Step 1 lists (else compute locally)

@@ -21,6 +21,7 @@
 #include "client/view/head_landmarks.hpp"
 #include "client/view/worker_pool.hpp"
 #include "common/anim/skinning.hpp"
+#include "common/anim/skinning_rig.hpp"
 #include "common/motion/joint_map.hpp"
 
 namespace vistel {
@@ -48,6 +49,7 @@ struct MemberFrame {
   std::vector<glm::mat4> joint_model;  // posed joint transforms, model space (njoint)
   std::vector<glm::mat4> skin;         // skinning matrices (njoint)
   std::vector<DualQuat> dq;            // their rigid parts (njoint)
+  RigFrame rig_frame;                  // the rig's per-frame data (sized once per avatar)
   std::vector<glm::vec3> positions;    // skinned (+ deformed), model space (nvert)
   std::vector<glm::vec3> normals;      // (nvert)
   glm::vec3 box_min{0.0f};             // room-space bounds of positions
@@ -65,6 +67,7 @@ struct MemberSlot {
   bool valid = false;  // avatar passed validation and has a skin
   int head_hint = -1;  // setHeadJoint() value the head was measured with
   Posture rest;        // fallback posture
+  SkinningRig rig;     // the rigid component's per-mesh data (options.skinning)
   HeadLandmarks head;
   glm::mat4 head_rest_inverse{1.0f};
   std::shared_ptr<PostSkinDeformer> deformer;  // of the frame being skinned
@@ -230,12 +233,20 @@ void RoomView::Impl::prepareSlot(MemberSlot& slot, const MemberView& member, int
                        : headFromJointMaps(avatar.skeleton);
   if (head_joint < 0) head_joint = findHeadJoint(avatar.skeleton);
   slot.head = measureHead(avatar, head_joint);
+  // The rigid component; a single-joint prop needs no spine, so its fallback is no news.
+  slot.rig = makeSkinningRig(avatar.skeleton, avatar.skin, options.skinning, head_joint);
+  for (MemberFrame& frame : slot.frames) frame.rig_frame = makeRigFrame(slot.rig);
+  if (!slot.rig.warning.empty() && avatar.skeleton.jointCount() > 1) {
+    warning = fmt::format("member {} ('{}'): {}", member.id, member.name, slot.rig.warning);
+  }
   slot.head_rest_inverse = glm::inverse(slot.head.rest_model);
   if (!options.headless) slot.mesh.create(avatar.skin.vertexCount(), avatar.skin.indices);
   // Rigid skinning on the GPU where it fits, and how far the skin reaches from the joints.
   slot.gpu_capable = false;
   slot.uploaded_offsets = 0;
-  if (options.gpu_skinning && GpuSkinMesh::supports(avatar.skin, avatar.skeleton.jointCount())) {
+  // (The vertex shader does dual quaternions only; other methods skin on the CPU.)
+  if (options.gpu_skinning && slot.rig.method == SkinningMethod::kDualQuaternion &&
+      GpuSkinMesh::supports(avatar.skin, avatar.skeleton.jointCount())) {
     if (options.headless) {
       slot.gpu_capable = true;
     } else if (Status st = slot.gpu_mesh.create(avatar.skin, avatar.skeleton.jointCount()); st) {
@@ -285,7 +296,7 @@ void RoomView::Impl::poseBack(MemberSlot& slot, const MemberView& member) {
     poseSkeleton(skeleton, frame.posture, frame.joint_model);
     skinningMatrices(skeleton, frame.joint_model, frame.skin);
   }
-  toDualQuats(frame.skin, frame.dq);
+  prepareRigFrame(slot.rig, frame.skin, frame.dq, frame.rig_frame);
   // On the GPU: members whose deformer leaves the vertices rigid, or only adds offsets.
   frame.gpu = false;
   frame.has_offsets = false;
@@ -312,9 +323,9 @@ void RoomView::Impl::runItem(int index) {
   MemberFrame& frame = slot.back();
   const auto first = static_cast<std::size_t>(item.first);
   const auto count = static_cast<std::size_t>(item.count);
-  skinDualQuaternion(slot.avatar->skin, frame.dq, first,
-                     std::span(frame.positions).subspan(first, count),
-                     std::span(frame.normals).subspan(first, count));
+  skinRigRange(slot.avatar->skin, slot.rig, frame.skin, frame.dq, frame.rig_frame, first,
+               std::span(frame.positions).subspan(first, count),
+               std::span(frame.normals).subspan(first, count));
   if (slot.chunks_left.fetch_sub(1, std::memory_order_acq_rel) == 1) finishMember(slot);
 }
 

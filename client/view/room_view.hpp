@@ -1,13 +1,14 @@
 // RoomView: draws everyone in one shared room (DESIGN.md §1, §6 "Threads").
 //
 // Per frame, for every member: pose the skeleton (or take the pose its deformer already
-// made: PostSkinDeformer::copyPose), skin the mesh with dual quaternions (Kavan et al.
-// 2007) in a worker pool into that member's double-buffered vertex arrays (sized once per
-// avatar; no allocation per frame after warm-up), run the member's optional post-skin
-// deformer (the deformable component's hook) — or, with gpu_skinning, leave the skinning
-// of members that need no CPU vertices to the vertex shader — then upload and draw:
-// lit skin with a per-member tint, a checker floor, a marker and a name tag above each
-// head, a camera that frames the room or sits in the self member's head, optionally in
+// made: PostSkinDeformer::copyPose), skin the mesh (ViewOptions::skinning: dual
+// quaternions, Kavan et al. 2007, by default; or LBS, the spine lattice, rigid + slerp) in
+// a worker pool into that member's double-buffered vertex arrays (sized once per avatar; no
+// allocation per frame after warm-up), run the member's optional post-skin deformer (the
+// deformable component's hook) — or, with gpu_skinning, leave the skinning of members that
+// need no CPU vertices to the vertex shader — then upload and draw: lit skin with a
+// per-member tint, a checker floor, a marker and a name tag above each head, a camera that
+// frames the room or sits in the self member's head, optionally in
 // stereo (side by side or red/cyan anaglyph).
 //
 // Threads: create(), render() and every other member function must be called from the
@@ -33,6 +34,7 @@
 #include "client/render/camera.hpp"  // EyeCamera
 #include "client/render/image.hpp"   // Image
 #include "common/anim/posture.hpp"
+#include "common/anim/skinning.hpp"
 #include "common/avatar/avatar_model.hpp"
 #include "common/base/result.hpp"
 
@@ -131,6 +133,11 @@ struct ViewOptions {
   // skinnedPositions() are empty, and their bounds (camera framing) come from the posed
   // joints. Headless, such members are not skinned at all (a GPU client's CPU work).
   bool gpu_skinning = false;
+  // The rigid component (common/anim/skinning_rig.hpp), built per avatar when it first
+  // appears (kSpineFfd takes the member's head joint, see setHeadJoint, and falls back to
+  // DQS with a lastWarning() where the skeleton has no spine). The vertex shader does DQS
+  // only: with any other method members are skinned on the CPU whatever gpu_skinning says.
+  SkinningMethod skinning = SkinningMethod::kDualQuaternion;
 };
 
 // Timings and counts of the last frame (milliseconds of wall time on the calling thread).

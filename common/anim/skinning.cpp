@@ -49,6 +49,28 @@ void skinDualQuaternion(const SkinMesh& mesh, std::span<const DualQuat> skin, st
   }
 }
 
+std::string_view skinningMethodName(SkinningMethod method) {
+  switch (method) {
+    case SkinningMethod::kLinear:
+      return "lbs";
+    case SkinningMethod::kDualQuaternion:
+      return "dqs";
+    case SkinningMethod::kSpineFfd:
+      return "ffd";
+    case SkinningMethod::kRigidSlerp:
+      return "slerp";
+  }
+  return "dqs";
+}
+
+std::optional<SkinningMethod> parseSkinningMethod(std::string_view name) {
+  for (SkinningMethod m : {SkinningMethod::kLinear, SkinningMethod::kDualQuaternion,
+                           SkinningMethod::kSpineFfd, SkinningMethod::kRigidSlerp}) {
+    if (skinningMethodName(m) == name) return m;
+  }
+  return std::nullopt;
+}
+
 void toDualQuats(std::span<const glm::mat4> skin, std::span<DualQuat> out) {
   assert(out.size() == skin.size());
   for (std::size_t j = 0; j < skin.size(); ++j) out[j] = DualQuat::fromMatrix(skin[j]);

@@ -75,6 +75,8 @@ struct SceneSlot {
   std::vector<glm::mat4> skin_model;   // (njoint) bind -> posed, model space
   std::vector<glm::mat4> skin_world;   // (njoint) bind -> world (placement * skin_model)
   std::vector<DualQuat> dq;            // (njoint) skin_world as dual quaternions
+  SkinningRig rig;                     // the rigid component's per-mesh data (options.skinning)
+  RigFrame rig_frame;                  // the rig's per-frame data (world)
   std::vector<glm::vec3> rigid_pos;    // (nvert) world
   std::vector<glm::vec3> rigid_nrm;    // (nvert) world
   PosedPrimitives posed;               // world (empty items without a model)
@@ -231,6 +233,8 @@ Result<DeformScene> DeformScene::create(std::vector<SceneBody> bodies,
     b.skin_model.assign(nj, glm::mat4(1.0f));
     b.skin_world.assign(nj, glm::mat4(1.0f));
     b.dq.assign(nj, DualQuat{});
+    b.rig = makeSkinningRig(b.avatar->skeleton, b.avatar->skin, options.skinning);
+    b.rig_frame = makeRigFrame(b.rig);
     b.rigid_pos.assign(nv, glm::vec3(0.0f));
     b.rigid_nrm.assign(nv, glm::vec3(0.0f, 1.0f, 0.0f));
     if (b.model != nullptr) {
@@ -343,9 +347,7 @@ Status DeformScene::step(double time, const InteractionList* received) {
   Status status = prepare(time, received);
   // Rigid component: every body's vertices in world space, in chunks across the pool.
   const Clock::time_point t0 = Clock::now();
-  for (SceneSlot& b : s.bodies) {
-    if (s.options.skinning == SkinningMethod::kDualQuaternion) toDualQuats(b.skin_world, b.dq);
-  }
+  for (SceneSlot& b : s.bodies) prepareRigFrame(b.rig, b.skin_world, b.dq, b.rig_frame);
   auto skin = [&s](int t) {
     const SkinItem& item = s.skin_items[static_cast<std::size_t>(t)];
     SceneSlot& b = s.bodies[static_cast<std::size_t>(item.body)];
@@ -353,11 +355,7 @@ Status DeformScene::step(double time, const InteractionList* received) {
     const auto count = static_cast<std::size_t>(item.count);
     const std::span<glm::vec3> pos = std::span(b.rigid_pos).subspan(first, count);
     const std::span<glm::vec3> nrm = std::span(b.rigid_nrm).subspan(first, count);
-    if (s.options.skinning == SkinningMethod::kDualQuaternion) {
-      skinDualQuaternion(b.avatar->skin, b.dq, first, pos, nrm);
-    } else {
-      skinLinear(b.avatar->skin, b.skin_world, first, pos, nrm);
-    }
+    skinRigRange(b.avatar->skin, b.rig, b.skin_world, b.dq, b.rig_frame, first, pos, nrm);
   };
   parallelFor(s.pool.get(), static_cast<int>(s.skin_items.size()), skin);
   const Clock::time_point t1 = Clock::now();
@@ -399,6 +397,9 @@ BodyContactSummary DeformScene::contactSummary(int index) const {
 const DeformState* DeformScene::deformState(int index) const {
   const SceneSlot& b = impl_->bodies[static_cast<std::size_t>(index)];
   return b.deforms ? &b.state : nullptr;
+}
+const SkinningRig& DeformScene::skinningRig(int index) const {
+  return impl_->bodies[static_cast<std::size_t>(index)].rig;
 }
 int DeformScene::posturesAtRest() const { return impl_->postures_at_rest; }
 const SceneTimings& DeformScene::timings() const { return impl_->timings; }

@@ -3,7 +3,8 @@
 // the benchmarks (DESIGN.md §1, §3 "Per frame, three steps", §6).
 //
 // One frame, all in one call (step):
-//   rigid skinning of every body (LBS or DQS, in world space)
+//   rigid skinning of every body (options.skinning: LBS, DQS, the spine lattice or rigid +
+//   slerp, in world space; common/anim/skinning_rig.hpp)
 //   -> posePrimitives of every body with an implicit model
 //   -> Step 1 across all bodies (buildInteractions), or an interaction list received from a
 //      server (validated against the bodies; an invalid one is replaced by the local Step 1)
@@ -40,6 +41,7 @@
 
 #include "common/anim/posture.hpp"
 #include "common/anim/skinning.hpp"
+#include "common/anim/skinning_rig.hpp"
 #include "common/avatar/avatar_model.hpp"
 #include "common/base/result.hpp"
 #include "common/deform/deform.hpp"
@@ -59,7 +61,10 @@ struct SceneBody {
 };
 
 struct SceneOptions {
-  SkinningMethod skinning = SkinningMethod::kDualQuaternion;  // step()'s rigid component
+  SkinningMethod skinning = SkinningMethod::kDualQuaternion;  // step()'s rigid component;
+                                                              // kSpineFfd falls back to DQS
+                                                              // on a body without a spine
+                                                              // (see skinningRig().warning)
   bool rigid_only = false;  // no deformable component: step() skins and poses primitives
                             // (for props' dynamics) but runs no Step 1-3, deformBody() leaves
                             // vertices as they are
@@ -164,6 +169,10 @@ class DeformScene {
   // The body's deform state (counters, flags, per-partner contacts), or null when it does
   // not deform.
   const DeformState* deformState(int index) const;
+  // The body's rigid component as create() built it for options.skinning: the method that
+  // runs (rig.method) and why it differs from the requested one (rig.warning, e.g. a ball
+  // or a skeleton without a spine under kSpineFfd).
+  const SkinningRig& skinningRig(int index) const;
   // Bodies whose posture did not fit in the last frame.
   int posturesAtRest() const;
   const SceneTimings& timings() const;

@@ -1,6 +1,6 @@
 // vistel-avatar deform AVATAR (--bvh CLIP [--frames A:B] [--every N] | --rest [--frames A:B])
 //   [--ball X,Y,Z,R[,VX,VY,VZ]] [--ball-stiffness K] [--ball-physics] [--rigid-only]
-//   [--skinning lbs|dqs] [--threads N] --out OUT.glb [--forces-csv F]
+//   [--skinning lbs|dqs|ffd|slerp] [--threads N] --out OUT.glb [--forces-csv F]
 //
 // Runs the avatar (and optionally a ball, a second body) through a clip frame by frame with
 // the rigid and deformable components (common/scene DeformScene) and writes every frame
@@ -274,10 +274,13 @@ Status runDeform(const DeformCommandOptions& opt) {
   scene_options.rigid_only = opt.rigid_only;
   scene_options.threads = opt.threads;
   scene_options.skinning =
-      opt.skinning == "lbs" ? SkinningMethod::kLinear : SkinningMethod::kDualQuaternion;
+      parseSkinningMethod(opt.skinning).value_or(SkinningMethod::kDualQuaternion);
   Result<DeformScene> created = DeformScene::create(std::move(bodies), scene_options);
   if (!created) return created.error();
   DeformScene& scene = *created;
+  if (const std::string& why = scene.skinningRig(0).warning; !why.empty()) {
+    fmt::print(stderr, "vistel-avatar deform: warning: {}\n", why);
+  }
   const int nbody = scene.bodyCount();
 
   // The exported mesh: the avatar's skin, then the ball's (one mesh; vertex offsets).
@@ -452,8 +455,10 @@ void registerDeformCommand(CLI::App& app) {
                 "avatar's primitives) instead of a straight line");
   cmd->add_flag("--rigid-only", opt->rigid_only,
                 "skinning only: the same frames without the deformable component");
-  cmd->add_option("--skinning", opt->skinning, "lbs (linear blend) or dqs (dual quaternion)")
-      ->check(CLI::IsMember({"lbs", "dqs"}))
+  cmd->add_option("--skinning", opt->skinning,
+                  "lbs (linear blend), dqs (dual quaternion), ffd (the torso by a lattice along "
+                  "the spine, the rest dqs) or slerp (rigid + slerp)")
+      ->check(CLI::IsMember({"lbs", "dqs", "ffd", "slerp"}))
       ->capture_default_str();
   cmd->add_option("--threads", opt->threads, "threads for skinning and steps 2-3")
       ->capture_default_str();

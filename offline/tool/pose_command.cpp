@@ -1,12 +1,15 @@
-// vistel-avatar pose FILE (--bvh CLIP --frame K | --rest) [--skinning lbs|dqs] --out OUT.glb:
-// the avatar posed (rest, or a BVH frame retargeted onto it) and skinned, written as a
-// rigged glTF 2.0 binary whose bind posture is that posture.
+// vistel-avatar pose FILE (--bvh CLIP --frame K | --rest) [--skinning lbs|dqs|ffd|slerp]
+// --out OUT.glb: the avatar posed (rest, or a BVH frame retargeted onto it) and skinned,
+// written as a rigged glTF 2.0 binary whose bind posture is that posture. ffd takes the
+// spine chain below the head joint of the joint map that fits the avatar (by name when
+// none fits) and falls back to dqs, with a warning on stderr, when there is none.
 #include <memory>
 
 #include <fmt/format.h>
 
 #include "common/anim/posture.hpp"
 #include "common/anim/skinning.hpp"
+#include "common/anim/skinning_rig.hpp"
 #include "common/motion/bvh.hpp"
 #include "common/motion/joint_map.hpp"
 #include "common/motion/retarget.hpp"
@@ -76,6 +79,19 @@ Status runPose(const PoseOptions& opt) {
                 skel.names.size());
   }
 
+  // The rigid component's per-mesh data (ffd: the head from the joint map when one fits).
+  const SkinningMethod method = parseSkinningMethod(opt.skinning).value_or(SkinningMethod::kLinear);
+  int head = -1;
+  if (method == SkinningMethod::kSpineFfd) {
+    if (Result<std::vector<JointMap>> maps = loadJointMaps(opt.config); maps) {
+      if (Result<const JointMap*> map = selectJointMap(*maps, skel); map) {
+        head = skel.find((*map)->jointFor("head"));
+      }
+    }
+  }
+  const SkinningRig rig = makeSkinningRig(skel, avatar.skin, method, head);
+  if (!rig.warning.empty()) fmt::print(stderr, "vistel-avatar pose: warning: {}\n", rig.warning);
+
   // Joints, skinning matrices, skinned vertices.
   const std::size_t nj = skel.names.size();
   const std::size_t nv = avatar.skin.positions.size();
@@ -84,9 +100,8 @@ Status runPose(const PoseOptions& opt) {
   std::vector<glm::vec3> positions(nv), normals(nv);
   poseSkeleton(skel, posture, model);
   skinningMatrices(skel, model, skin);
-  const SkinningMethod method =
-      opt.skinning == "dqs" ? SkinningMethod::kDualQuaternion : SkinningMethod::kLinear;
-  skinMesh(avatar.skin, method, skin, dq, positions, normals);
+  RigFrame rig_frame = makeRigFrame(rig);
+  skinMesh(avatar.skin, rig, skin, dq, rig_frame, positions, normals);
 
   // The rigged file, bind posture = this posture.
   if (Status s = writeGlb(opt.out, posedAvatarScene(avatar, model, positions, normals)); !s)
@@ -112,8 +127,10 @@ void registerPoseCommand(CLI::App& app) {
   CLI::Option* frame = cmd->add_option("--frame", opt->frame, "frame of the clip (0-based)");
   CLI::Option* rest = cmd->add_flag("--rest", opt->rest, "use the rest posture");
   cmd->add_option("--skinning", opt->skinning,
-                  "skinning method: lbs (linear blend) or dqs (dual quaternion)")
-      ->check(CLI::IsMember({"lbs", "dqs"}));
+                  "skinning method: lbs (linear blend), dqs (dual quaternion), ffd (the torso "
+                  "by a lattice along the spine, the rest dqs) or slerp (rigid + slerp)")
+      ->check(CLI::IsMember({"lbs", "dqs", "ffd", "slerp"}))
+      ->capture_default_str();
   cmd->add_option("--out", opt->out, "output .glb file")->required();
   cmd->add_option("--config", opt->config, "config folder with skeletons/*.toml joint maps")
       ->capture_default_str();

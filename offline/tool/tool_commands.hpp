@@ -16,7 +16,8 @@ namespace vistel {
 
 // vistel-avatar info FILE [--json]
 void registerInfoCommand(CLI::App& app);
-// vistel-avatar pose FILE (--bvh CLIP --frame K | --rest) [--skinning lbs|dqs] --out OUT.glb
+// vistel-avatar pose FILE (--bvh CLIP --frame K | --rest) [--skinning lbs|dqs|ffd|slerp]
+//   --out OUT.glb
 void registerPoseCommand(CLI::App& app);
 // vistel-avatar default --out OUT.glb|OUT.vavatar [--primitives MAP] [--config DIR]
 void registerDefaultCommand(CLI::App& app);
@@ -25,7 +26,7 @@ void registerSolveCommand(CLI::App& app);
 // vistel-avatar build IN -o OUT.vavatar [--primitives MAP] [--config DIR]
 void registerBuildCommand(CLI::App& app);
 // vistel-avatar deform AVATAR (--bvh CLIP [--frames A:B] | --rest) [--ball X,Y,Z,R[,VX,VY,VZ]]
-//   [--rigid-only] --out OUT.glb [--forces-csv F]
+//   [--rigid-only] [--skinning lbs|dqs|ffd|slerp] --out OUT.glb [--forces-csv F]
 void registerDeformCommand(CLI::App& app);
 
 // Fits `avatar`'s implicit model (build_command.cpp; shared with deform): the joint map that
