@@ -6,6 +6,7 @@
 //                 [--frames DIR [--frames-every N]] [--config FILE] [--ball] [--rigid-only]
 //                 [--sensors FILE.toml [--calibrate-after S] | --source sim:CLIP.bvh
 //                  | --source recording:FILE.vrec] [--record FILE.vrec]
+//                 [--forces-out FILE.csv] [--force-feedback SENSORS.toml]
 //
 // With sensors (client/app/sensor_input.hpp) a sensor thread reads the devices (or the
 // simulated rig, or a recording), solves the own posture and sends it; C in the window
@@ -21,7 +22,13 @@
 // --stats-json writes, on exit, the receive rates, latency and frames rendered, and for
 // rendered frames frame_ms {p50, p99, max} (the frame's work, without the wait for the next
 // one), deform_share (the deformable component's part of it) and the bodies per frame
-// deformed at full rate, at a lower rate, or drawn rigid (the level of detail's tiers).
+// deformed at full rate, at a lower rate, or drawn rigid (the level of detail's tiers),
+// and own_forces: the own avatar's contact force per body part (its implicit primitives;
+// client/deform/own_forces.hpp) — frames in contact, peak and mean per part, the last
+// frame's forces. --forces-out streams those forces as CSV, a row per frame per part in
+// contact (and one when it lets go); a [force_feedback] section in the sensors config
+// (--sensors, or --force-feedback naming a sensors config) sends them to a HID
+// force-feedback device, at most at the frame rate.
 //
 // Threads: this (main) thread owns the window/GL and renders; a network thread runs
 // Asio (NetDriver); a source thread produces the own postures; the room view skins in
@@ -37,6 +44,7 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <unordered_map>
@@ -49,6 +57,7 @@
 
 #include "client/app/sensor_input.hpp"
 #include "client/app/server_interactions.hpp"
+#include "client/deform/own_forces.hpp"
 #include "client/deform/room_deformer.hpp"
 #include "client/net/asio.hpp"
 #include "client/net/client_config.hpp"
@@ -226,6 +235,12 @@ int main(int argc, char** argv) {
   app.add_option("--frames-every", frames_every, "with --frames: write every Nth frame")
       ->check(CLI::Range(1, 100000));
   app.add_option("--config", config_path, "client settings (TOML); built-in defaults if absent");
+  std::string forces_path, force_feedback_path;
+  app.add_option("--forces-out", forces_path,
+                 "stream the own avatar's contact force per body part as CSV to this file");
+  app.add_option("--force-feedback", force_feedback_path,
+                 "sensors config whose [force_feedback] device gets the own contact forces "
+                 "(default: the --sensors file)");
   SensorArgs sensor_args;
   addSensorOptions(app, sensor_args);
   CLI11_PARSE(app, argc, argv);
@@ -269,6 +284,24 @@ int main(int argc, char** argv) {
     return 1;
   }
   const Skeleton& own_skeleton = (*own_avatar)->skeleton;
+
+  // The own avatar's contact forces per body part: stats, CSV, force-feedback device.
+  std::unique_ptr<OwnForces> own_forces;
+  if ((*own_avatar)->implicit || !forces_path.empty() || !force_feedback_path.empty()) {
+    OwnForcesOptions options;
+    options.csv_path = forces_path;
+    options.force_feedback_config =
+        force_feedback_path.empty() ? sensor_args.sensors_path : force_feedback_path;
+    options.frame_rate_hz = config->frame_rate_hz;
+    options.require_force_feedback = !force_feedback_path.empty();
+    auto created = OwnForces::create(**own_avatar, options);
+    if (!created) {
+      spdlog::error("{}", created.error().message);
+      return 1;
+    }
+    own_forces = std::move(*created);
+    for (const std::string& w : own_forces->warnings()) spdlog::warn("{}", w);
+  }
 
   // Own posture from sensors (solved on the sensor thread), else from a clip or at rest.
   std::unique_ptr<SensorInput> sensors;
@@ -317,6 +350,7 @@ int main(int argc, char** argv) {
     options.offscreen = !hasDisplay();
     options.worker_threads = config->worker_threads;
     options.gpu_skinning = config->gpu_skinning;
+    options.skinning = config->skinning;
     options.stereo = stereo_text == "side-by-side" ? StereoMode::kSideBySide
                      : stereo_text == "anaglyph"   ? StereoMode::kAnaglyph
                                                    : StereoMode::kOff;
@@ -378,6 +412,11 @@ int main(int argc, char** argv) {
     deformer = std::make_unique<RoomDeformer>();
     if (Status st = deformer->setLod(config->lod); !st) spdlog::warn("{}", st.error().message);
   }
+  if (own_forces && !deformer && (!forces_path.empty() || !force_feedback_path.empty())) {
+    spdlog::warn(
+        "own contact forces need the deformable component (rendering, [deform] enabled, no "
+        "--rigid-only): they stay zero");
+  }
   FrameFigures figures;
   ServerInteractions server_lists;
   InteractionList received_list;
@@ -424,9 +463,11 @@ int main(int argc, char** argv) {
       if (view->shouldClose()) break;
       if (sensors) sensors->onKeys(view->takeKeyPresses());
       views.resize(members.size());
+      std::optional<std::uint32_t> self_view;
       for (std::size_t i = 0; i < members.size(); ++i) {
         const FrameMember& f = members[i];
         MemberView& v = views[i];
+        if (f.is_self && !self_view) self_view = f.id;
         auto found = models.find(f.avatar_hash);
         if (found == models.end()) {
           if (auto model = cache->find(f.avatar_hash))
@@ -467,6 +508,11 @@ int main(int argc, char** argv) {
       }
       view->render(views);
       if (deformer) deformer->finish();
+      if (own_forces) {
+        if (Status st = own_forces->frame(elapsed, deformer.get(), self_view); !st) {
+          spdlog::warn("{}", st.error().message);
+        }
+      }
       {
         // This frame's figures: the deformation's wall time is prepare() plus Steps 2-3
         // spread over the view's threads.
@@ -516,7 +562,9 @@ int main(int argc, char** argv) {
     return std::make_pair(text, line);
   });
   if (!stats_path.empty()) {
-    if (Status st = writeFileText(stats_path, withFields(json, figures.json())); !st) {
+    const std::string fields =
+        figures.json() + (own_forces ? ",\n" + own_forces->json() : std::string());
+    if (Status st = writeFileText(stats_path, withFields(json, fields)); !st) {
       spdlog::error("{}", st.error().message);
       exit_code = 1;
     }
@@ -534,6 +582,10 @@ int main(int argc, char** argv) {
         deformer->bodyCount(), deformer->rebuilds(),
         static_cast<unsigned long long>(server_lists.used()),
         static_cast<unsigned long long>(server_lists.refused()));
+  }
+  if (own_forces) {
+    if (Status st = own_forces->close(); !st) spdlog::warn("{}", st.error().message);
+    std::printf("vistel-client: %s\n", own_forces->summary().c_str());
   }
   std::fflush(stdout);
   driver->stop("client exiting");

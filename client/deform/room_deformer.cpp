@@ -306,4 +306,21 @@ std::optional<BodyContactSummary> RoomDeformer::contact(std::uint32_t view_id) c
   return shared_->scene->contactSummary(body);
 }
 
+std::optional<PartForceInput> RoomDeformer::partForceInput(std::uint32_t view_id) const {
+  const int body = bodyOf(view_id);
+  if (body < 0) return std::nullopt;
+  const DeformScene& scene = *shared_->scene;
+  const DeformState* state = scene.deformState(body);
+  if (state == nullptr || !scene.contactSummary(body).deformed) return std::nullopt;
+  PartForceInput in;
+  in.positions = state->positions;
+  in.normals = state->normals;
+  in.pressure = state->pressure;
+  in.contact_body = state->contact_body;
+  in.self_body = body;
+  // Placements are rigid: world -> model is the transpose of their rotation.
+  in.world_to_model = glm::transpose(glm::mat3(scene.body(body).placement));
+  return in;
+}
+
 }  // namespace vistel

@@ -36,6 +36,7 @@
 #include <span>
 #include <vector>
 
+#include "client/deform/part_forces.hpp"
 #include "client/view/room_view.hpp"
 #include "common/base/result.hpp"
 #include "common/scene/deform_lod.hpp"
@@ -92,6 +93,11 @@ class RoomDeformer {
   // This frame's contact of a view's body (area, net force; for force-feedback devices),
   // or nullopt when it is not a body. Valid after finish().
   std::optional<BodyContactSummary> contact(std::uint32_t view_id) const;
+  // Step 3's per-vertex results of a view's body this frame, for computePartForces
+  // (client/deform/part_forces.hpp; forces in the body's model space), or nullopt when it is
+  // not a body or was not deformed this frame (a lower-rate or rigid tier: no contact
+  // measured). The spans stay valid until the next prepare() or sync(). Valid after finish().
+  std::optional<PartForceInput> partForceInput(std::uint32_t view_id) const;
   // Bodies the view skinned differently from prepare() in the last frame (left rigid).
   int skippedLastFrame() const { return skipped_reported_; }
   // The tier of a view's body this frame (after prepare()), or nullopt when not a body.

@@ -303,6 +303,63 @@ void readHid(Reader& r, const toml::table& t, HidConfig& hid) {
   }
 }
 
+// [force_feedback] and its [[force_feedback.channel]]s: every channel inside the report,
+// after the report id byte, none overlapping another.
+void readForceFeedback(Reader& r, const toml::table& t, ForceFeedbackConfig& ff) {
+  const std::string where = "force_feedback";
+  r.allowOnly(
+      t, where,
+      {"vendor_id", "product_id", "serial", "report_id", "report_size", "max_rate_hz", "channel"});
+  ff.enabled = true;
+  ff.vendor_id = static_cast<std::uint16_t>(r.integer(t, "vendor_id", where, 0, 0, 0xFFFF));
+  ff.product_id = static_cast<std::uint16_t>(r.integer(t, "product_id", where, 0, 0, 0xFFFF));
+  ff.serial = r.str(t, "serial", where, "");
+  ff.report_id = static_cast<int>(r.integer(t, "report_id", where, 0, 0, 255));
+  ff.report_size = static_cast<int>(r.integer(t, "report_size", where, 64, 2, 4096));
+  ff.max_rate_hz = r.number(t, "max_rate_hz", where, 60.0, 0.1, 1000.0);
+  const std::vector<const toml::table*> channels = r.tables(t, "channel", where);
+  if (channels.empty() && !r.failed()) {
+    r.fail(where + ".channel", "no channels ([[force_feedback.channel]] with part and offset)");
+  }
+  std::vector<std::uint8_t> used(static_cast<std::size_t>(ff.report_size), 0);
+  for (std::size_t i = 0; i < channels.size() && !r.failed(); ++i) {
+    const toml::table& c = *channels[i];
+    const std::string w = fmt::format("force_feedback.channel[{}]", i);
+    r.allowOnly(c, w, {"part", "offset", "type", "scale", "axis"});
+    ForceFeedbackChannel ch;
+    if (c.get("part") == nullptr) r.fail(w + ".part", "missing (the avatar's primitive name)");
+    ch.part = r.str(c, "part", w, "");
+    if (ch.part.empty() && !r.failed()) r.fail(w + ".part", "must not be empty");
+    if (c.get("offset") == nullptr) r.fail(w + ".offset", "missing (byte offset in the report)");
+    ch.offset = static_cast<int>(r.integer(c, "offset", w, 1, 1, 4095));
+    ch.type = hidType(r, c, "type", w);
+    if (c.get("type") == nullptr) ch.type = HidValueType::kU8;
+    ch.scale = static_cast<float>(r.number(c, "scale", w, 1.0, 1e-9, 1e9));
+    ch.component = r.choice(c, "axis", w, ForceComponent::kMagnitude,
+                            {{"x", ForceComponent::kX},
+                             {"y", ForceComponent::kY},
+                             {"z", ForceComponent::kZ},
+                             {"magnitude", ForceComponent::kMagnitude}});
+    if (r.failed()) break;
+    const int size = ch.type == HidValueType::kF32 ? 4 : ch.type == HidValueType::kI16 ? 2 : 1;
+    if (ch.offset + size > ff.report_size) {
+      r.fail(w + ".offset", fmt::format("{} + {} bytes reaches past the {}-byte report", ch.offset,
+                                        size, ff.report_size));
+      break;
+    }
+    for (int b = ch.offset; b < ch.offset + size; ++b) {
+      if (used[static_cast<std::size_t>(b)] != 0) {
+        r.fail(w + ".offset", fmt::format("byte {} is already taken by channel[{}]", b,
+                                          static_cast<int>(used[static_cast<std::size_t>(b)]) - 1));
+        break;
+      }
+      used[static_cast<std::size_t>(b)] =
+          static_cast<std::uint8_t>(std::min<std::size_t>(i + 1, 255));
+    }
+    ff.channels.push_back(std::move(ch));
+  }
+}
+
 }  // namespace
 
 Result<GloveDeviceConfig> parseGloveConfig(std::string_view toml_text,
@@ -323,9 +380,9 @@ Result<SensorSetup> parseSensorSetup(std::string_view toml_text, std::string_vie
   SensorSetup setup;
   setup.source = std::string(source_name);
   setup.text = std::string(toml_text);
-  r.allowOnly(
-      root, "",
-      {"participant", "tracker", "station", "glove", "hid", "solver", "calibration", "sim"});
+  r.allowOnly(root, "",
+              {"participant", "tracker", "station", "glove", "hid", "solver", "calibration", "sim",
+               "force_feedback"});
   setup.participant = r.str(root, "participant", "", "participant");
 
   // The tracker.
@@ -537,6 +594,11 @@ Result<SensorSetup> parseSensorSetup(std::string_view toml_text, std::string_vie
     s.random_dropout_s = r.number(*t, "random_dropout_s", w, s.random_dropout_s, 0, 100);
   }
   setup.sim.mounts = setup.mounts;
+
+  // Force feedback.
+  if (const toml::table* t = r.table(root, "force_feedback", "")) {
+    readForceFeedback(r, *t, setup.force_feedback);
+  }
   if (r.failed()) return r.error();
   return setup;
 }

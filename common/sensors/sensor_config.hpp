@@ -100,6 +100,34 @@ struct HidConfig {
   TransmitterPlacement transmitter;
 };
 
+// A force-feedback device (the [force_feedback] section): the own avatar's contact force per
+// body part, sent as HID output reports (common/sensors/io/force_feedback.hpp). A report is
+// report_size bytes as hid_write takes it: byte 0 is the report id (0 for a device that
+// uses no report ids), the channels' values follow at their offsets, little-endian, every
+// other byte 0.
+enum class ForceComponent : std::uint8_t { kX, kY, kZ, kMagnitude };
+struct ForceFeedbackChannel {
+  std::string part;  // the avatar's primitive ("l_hand"); names the avatar lacks are warned
+                     // about at start and send 0
+  int offset = 1;    // byte offset in the report, >= 1 (byte 0 is the report id)
+  HidValueType type = HidValueType::kU8;
+  float scale = 1.0f;  // newtons per count (> 0): count = round(value / scale), clamped to
+                       // the type's range (u8: 0..255, i16: -32768..32767); f32: newtons / scale
+  ForceComponent component = ForceComponent::kMagnitude;  // a model-space axis (the avatar's
+                                                          // +X left, +Y up, +Z forward) or |F|
+};
+struct ForceFeedbackConfig {
+  bool enabled = false;  // the section is present
+  std::uint16_t vendor_id = 0;
+  std::uint16_t product_id = 0;
+  std::string serial;         // empty: the first matching device
+  int report_id = 0;          // byte 0 of every report (0..255)
+  int report_size = 64;       // bytes, report id included (2..4096)
+  double max_rate_hz = 60.0;  // reports per second at most (the client also caps it at its
+                              // frame rate)
+  std::vector<ForceFeedbackChannel> channels;  // non-overlapping, inside the report
+};
+
 enum class TrackerKind : std::uint8_t { kNone, kFastrak, kHid };
 
 struct SensorSetup {
@@ -112,8 +140,9 @@ struct SensorSetup {
   std::array<SensorMount, kBodySiteCount> mounts = defaultSensorMounts();
   SolverOptions solver;
   CalibrationOptions calibration;
-  SimOptions sim;    // [sim] options, used by sim: sources
-  std::string text;  // the file's text (recorded into .vrec headers)
+  SimOptions sim;                      // [sim] options, used by sim: sources
+  ForceFeedbackConfig force_feedback;  // [force_feedback]: where contact forces go
+  std::string text;                    // the file's text (recorded into .vrec headers)
 };
 
 Result<SensorSetup> parseSensorSetup(std::string_view toml_text, std::string_view source_name);
