@@ -18,6 +18,7 @@ constexpr std::uint8_t kTypeHeader = 1;
 constexpr std::uint8_t kTypeFrame = 2;
 constexpr std::uint8_t kTypeCalibration = 3;
 constexpr std::size_t kFileHeaderSize = 12;
+constexpr std::size_t kMaxPose = 1024;  // bytes of CalibrationRecord::pose
 
 // ---- payload writers ---------------------------------------------------------------------
 
@@ -118,7 +119,7 @@ bool readGlove(ByteReader& r, GloveReading& out, std::string& why) {
 bool readCalibration(ByteReader& r, CalibrationRecord& out, std::string& why) {
   out.start_time = r.f64();
   out.end_time = r.f64();
-  out.pose = r.string(1024);
+  out.pose = r.string(kMaxPose);
   for (StationReading& s : out.stations) {
     if (!readStation(r, s, why)) return false;
   }
@@ -256,6 +257,100 @@ void encodeCalibrationRecord(const CalibrationRecord& c, std::vector<std::uint8_
   finishRecord(out, start);
 }
 
+namespace {
+
+constexpr std::size_t kRecordOverhead = 9;  // u32 size, u8 type, u32 CRC
+constexpr std::size_t kListedDamage = 3;    // stretches named in stop_reason
+
+// Payload sizes of the fixed-layout records (a calibration adds its pose's bytes).
+std::size_t framePayloadSize() {
+  static const std::size_t size = [] {
+    std::vector<std::uint8_t> out;
+    encodeFrameRecord(SensorFrame{}, out);
+    return out.size() - kRecordOverhead;
+  }();
+  return size;
+}
+std::size_t calibrationPayloadBase() {
+  static const std::size_t size = [] {
+    std::vector<std::uint8_t> out;
+    encodeCalibrationRecord(CalibrationRecord{}, out);
+    return out.size() - kRecordOverhead;
+  }();
+  return size;
+}
+
+// How the bytes at a position frame as a record.
+struct Framing {
+  bool ok = false;         // size fits, the CRC matches
+  std::uint32_t size = 0;  // payload bytes
+  std::uint8_t type = 0;
+  std::string why;  // when not ok
+};
+
+Framing frameAt(std::span<const std::uint8_t> bytes, std::size_t pos) {
+  Framing f;
+  const std::size_t left = bytes.size() - pos;
+  if (left < kRecordOverhead) {
+    f.why = fmt::format("truncated ({} bytes left, a record needs at least 9)", left);
+    return f;
+  }
+  std::memcpy(&f.size, bytes.data() + pos, 4);
+  f.type = bytes[pos + 4];
+  if (f.size > kRecordingMaxPayload) {
+    f.why = fmt::format("record size {} exceeds {}", f.size, kRecordingMaxPayload);
+    return f;
+  }
+  if (left < static_cast<std::size_t>(f.size) + kRecordOverhead) {
+    f.why = fmt::format("truncated (the record needs {} bytes, {} left)", f.size + 9, left);
+    return f;
+  }
+  std::uint32_t stored;
+  std::memcpy(&stored, bytes.data() + pos + 5 + f.size, 4);
+  if (crc32(bytes.subspan(pos + 4, f.size + 1u)) != stored) {
+    f.why = "checksum mismatch";
+    return f;
+  }
+  f.ok = true;
+  return f;
+}
+
+// Where a frame or calibration record starts at or after `from` (the resynchronisation
+// after a damaged stretch), or bytes.size(). Only a size that fits the type is checked
+// with the CRC, so random bytes cost little.
+std::size_t nextRecord(std::span<const std::uint8_t> bytes, std::size_t from) {
+  const std::size_t frame = framePayloadSize();
+  const std::size_t calibration = calibrationPayloadBase();
+  for (std::size_t q = from; q + kRecordOverhead <= bytes.size(); ++q) {
+    const std::uint8_t type = bytes[q + 4];
+    if (type != kTypeFrame && type != kTypeCalibration) continue;
+    std::uint32_t size;
+    std::memcpy(&size, bytes.data() + q, 4);
+    const bool fits =
+        type == kTypeFrame ? size == frame : size >= calibration && size <= calibration + kMaxPose;
+    if (fits && frameAt(bytes, q).ok) return q;
+  }
+  return bytes.size();
+}
+
+// One log line for a damaged recording.
+std::string damageSummary(const Recording& rec, std::string_view source) {
+  std::string s = fmt::format("{}: skipped {} bytes in {} place{}", source, rec.skipped_bytes,
+                              rec.damage.size(), rec.damage.size() == 1 ? "" : "s");
+  for (std::size_t i = 0; i < rec.damage.size() && i < kListedDamage; ++i) {
+    const RecordingDamage& d = rec.damage[i];
+    s += fmt::format("{} record {} at byte {} ({} bytes): {}", i == 0 ? ":" : ";", d.record,
+                     d.offset, d.bytes, d.why);
+  }
+  if (rec.damage.size() > kListedDamage) {
+    s += fmt::format("; and {} more", rec.damage.size() - kListedDamage);
+  }
+  s += fmt::format("; kept {} frames", rec.frames.size());
+  return s;
+}
+
+}  // namespace
+
 Result<Recording> decodeRecording(std::span<const std::uint8_t> bytes, std::string_view source) {
   if (bytes.size() < kFileHeaderSize) {
     return fail("{}: not a recording: {} bytes, shorter than the 12-byte file header", source,
@@ -272,58 +367,78 @@ Result<Recording> decodeRecording(std::span<const std::uint8_t> bytes, std::stri
   }
   Recording rec;
   std::size_t pos = kFileHeaderSize;
-  bool have_header = false;
-  std::size_t index = 0;
-  // Stops at the first bad record: before the header record that is an error.
-  auto stop = [&](std::string why) -> Result<Recording> {
-    if (!have_header) return fail("{}: header record at byte {}: {}", source, pos, why);
-    rec.complete = false;
-    rec.stop_offset = pos;
-    rec.stop_reason = fmt::format("{}: record {} at byte {}: {}; kept {} frames before it", source,
-                                  index, pos, why, rec.frames.size());
-    return std::move(rec);
+
+  // The header record must come first and be intact: without it there is no recording.
+  {
+    const Framing f = frameAt(bytes, pos);
+    if (!f.ok) return fail("{}: header record at byte {}: {}", source, pos, f.why);
+    if (f.type != kTypeHeader) {
+      return fail("{}: header record at byte {}: expected the header record, found type {}", source,
+                  pos, f.type);
+    }
+    ByteReader r(bytes.subspan(pos + 5, f.size));
+    std::string why;
+    if (!readHeader(r, rec.header, why)) {
+      return fail("{}: header record at byte {}: {}", source, pos, why);
+    }
+    if (r.remaining() != 0) {
+      return fail("{}: header record at byte {}: {} unexpected bytes at the end of the record",
+                  source, pos, r.remaining());
+    }
+    pos += f.size + kRecordOverhead;
+  }
+
+  // Then every record that frames and checks; a bad one is skipped (with its reason),
+  // either exactly (framed, bad values) or up to the next record that frames.
+  std::size_t index = 1;
+  auto skip = [&](std::size_t to, std::string why) {
+    rec.damage.push_back({index, pos, to - pos, std::move(why)});
+    rec.skipped_bytes += to - pos;
+    pos = to;
   };
   while (pos < bytes.size()) {
-    const std::size_t left = bytes.size() - pos;
-    if (left < 9)
-      return stop(fmt::format("truncated ({} bytes left, a record needs at least 9)", left));
-    std::uint32_t size;
-    std::memcpy(&size, bytes.data() + pos, 4);
-    if (size > kRecordingMaxPayload)
-      return stop(fmt::format("record size {} exceeds {}", size, kRecordingMaxPayload));
-    if (left < static_cast<std::size_t>(size) + 9) {
-      return stop(fmt::format("truncated (the record needs {} bytes, {} left)", size + 9, left));
+    const Framing f = frameAt(bytes, pos);
+    if (!f.ok) {
+      skip(nextRecord(bytes, pos + 1), f.why);
+      ++index;
+      continue;
     }
-    const std::uint8_t type = bytes[pos + 4];
-    const std::span<const std::uint8_t> typed = bytes.subspan(pos + 4, size + 1);
-    std::uint32_t stored;
-    std::memcpy(&stored, bytes.data() + pos + 5 + size, 4);
-    if (crc32(typed) != stored) return stop("checksum mismatch");
-    ByteReader r(typed.subspan(1));
+    // A record that frames: kept when its values check, else skipped exactly.
+    const std::size_t end = pos + f.size + kRecordOverhead;
+    ByteReader r(bytes.subspan(pos + 5, f.size));
     std::string why;
-    if (!have_header) {
-      if (type != kTypeHeader)
-        return stop(fmt::format("expected the header record, found type {}", type));
-      if (!readHeader(r, rec.header, why)) return stop(why);
-      have_header = true;
-    } else if (type == kTypeFrame) {
-      SensorFrame f;
-      if (!readFrame(r, f, why)) return stop(why);
-      rec.frames.push_back(f);
-    } else if (type == kTypeCalibration) {
-      CalibrationRecord c;
-      if (!readCalibration(r, c, why)) return stop(why);
-      rec.calibrations.push_back(std::move(c));
-      rec.calibration_after.push_back(rec.frames.size());
+    SensorFrame frame;
+    CalibrationRecord calibration;
+    bool good = false;
+    if (f.type == kTypeFrame) {
+      good = readFrame(r, frame, why);
+    } else if (f.type == kTypeCalibration) {
+      good = readCalibration(r, calibration, why);
     } else {
-      return stop(fmt::format("unknown record type {}", type));
+      why = f.type == kTypeHeader ? std::string("a second header record")
+                                  : fmt::format("unknown record type {}", f.type);
     }
-    if (r.remaining() != 0)
-      return stop(fmt::format("{} unexpected bytes at the end of the record", r.remaining()));
-    pos += static_cast<std::size_t>(size) + 9;
+    if (good && r.remaining() != 0) {
+      good = false;
+      why = fmt::format("{} unexpected bytes at the end of the record", r.remaining());
+    }
+    if (!good) {
+      skip(end, std::move(why));
+    } else if (f.type == kTypeFrame) {
+      rec.frames.push_back(frame);
+    } else {
+      rec.calibrations.push_back(std::move(calibration));
+      rec.calibration_after.push_back(rec.frames.size());
+    }
+    pos = end;
     ++index;
   }
-  if (!have_header) return fail("{}: no header record after the file header", source);
+
+  if (!rec.damage.empty()) {
+    rec.complete = false;
+    rec.stop_offset = rec.damage.front().offset;
+    rec.stop_reason = damageSummary(rec, source);
+  }
   return rec;
 }
 
@@ -389,8 +504,9 @@ RecordingSource::RecordingSource(Recording recording, std::string name)
 PollResult RecordingSource::poll(double /*timeout_s*/, SensorFrame& frame) {
   if (next_ >= recording_.frames.size()) {
     return PollResult::end(
-        recording_.complete ? fmt::format("{}: end of recording ({} frames)", name_, next_)
-                            : fmt::format("end of the readable part: {}", recording_.stop_reason));
+        recording_.complete
+            ? fmt::format("{}: end of recording ({} frames)", name_, next_)
+            : fmt::format("end of the recording's good records: {}", recording_.stop_reason));
   }
   frame = recording_.frames[next_++];
   return PollResult::frame();
@@ -398,7 +514,10 @@ PollResult RecordingSource::poll(double /*timeout_s*/, SensorFrame& frame) {
 
 std::string RecordingSource::describe() const {
   return fmt::format("recording {} ({} frames{})", name_, recording_.frames.size(),
-                     recording_.complete ? "" : ", damaged tail");
+                     recording_.complete
+                         ? ""
+                         : fmt::format(", {} damaged bytes skipped in {} places",
+                                       recording_.skipped_bytes, recording_.damage.size()));
 }
 
 }  // namespace vistel

@@ -11,8 +11,11 @@
 // calibration taken during the session: its window and the averaged readings).
 //
 // The writer appends each record with a single write() on an O_APPEND descriptor, so a
-// process killed mid-write loses at most the record being written; the reader loads every
-// record up to the last good one and says where (byte offset) and why it stopped.
+// process killed mid-write loses at most the record being written. The reader keeps every
+// good record: after a damaged stretch (a bad size, a checksum mismatch, a cut tail, a
+// record whose values are out of range) it resynchronises on the next record that frames
+// and checks (size, type, CRC-32, then every value), and lists each skipped stretch with
+// its record index, byte offset, length and reason.
 #pragma once
 
 #include <array>
@@ -62,19 +65,38 @@ struct RecordingHeader {
   std::string config_text;  // the sensors config in use (TOML), may be empty
 };
 
+// A stretch of the file the reader skipped: one record whose values were bad (well framed,
+// so exactly its bytes), or bytes up to the next record that frames and checks (or to the
+// end of the file: a cut tail).
+struct RecordingDamage {
+  std::size_t record = 0;    // records read before it (the header and any earlier stretch
+                             // count one each): the index the record there would have had
+  std::uint64_t offset = 0;  // first byte skipped, from the start of the file
+  std::uint64_t bytes = 0;   // bytes skipped from there (> 0)
+  std::string why;           // what was wrong with the record at `offset`
+};
+
 struct Recording {
   RecordingHeader header;
   std::vector<SensorFrame> frames;
   std::vector<CalibrationRecord> calibrations;  // taken during the session, in order
   std::vector<std::size_t> calibration_after;   // frames recorded before each calibration
-  bool complete = true;                         // every byte was a good record
-  std::string stop_reason;                      // why reading stopped early (empty when complete)
-  std::uint64_t stop_offset = 0;                // byte offset of the first bad record
+  bool complete = true;                         // every byte was a good record (damage empty)
+  std::vector<RecordingDamage> damage;          // skipped stretches, in file order, disjoint
+  std::uint64_t skipped_bytes = 0;              // sum of damage[].bytes
+  // Empty when complete; otherwise one line for the log: the source, how much was skipped
+  // where and why (the first few stretches), and how many frames were kept.
+  std::string stop_reason;
+  std::uint64_t stop_offset = 0;  // byte offset of the first damage (0 when complete)
 };
 
 // Decodes a whole file's bytes. Fails (naming source, byte offset and reason) only when not
 // even the file header and the header record are intact; otherwise returns every good
-// record before the first bad one, with complete = false and the reason.
+// record of the file, with complete = false and the damage listed when some bytes had to be
+// skipped. Cost: linear in the file for intact records; a damaged stretch is rescanned byte
+// by byte, with a CRC-32 over a record's length only where the bytes hold a frame or
+// calibration record's exact size and type (rare in damage; at worst about a record's
+// length of work per damaged byte).
 Result<Recording> decodeRecording(std::span<const std::uint8_t> bytes, std::string_view source);
 Result<Recording> loadRecording(const std::string& path);
 
@@ -112,7 +134,7 @@ class RecordingWriter {
 };
 
 // Replays a recording's frames in order (as fast as polled; the frames keep their times):
-// kEnd after the last one, naming where and why the file stopped when it was damaged.
+// kEnd after the last one, naming where and why bytes were skipped when it was damaged.
 class RecordingSource final : public SensorSource {
  public:
   explicit RecordingSource(Recording recording, std::string name);

@@ -1,8 +1,11 @@
-// .vrec recordings: round trip, truncated at every length, corrupted at every byte, and a
-// writer process killed mid-stream: readers keep every record before the damage and say
-// where and why they stopped.
+// .vrec recordings: round trip, truncated at every length, corrupted at every byte, bytes
+// slipped in or out, random damage, and a writer process killed mid-stream: readers keep
+// every good record, resynchronise after damage and say where and why they skipped bytes.
+#include <algorithm>
+#include <cmath>
 #include <csignal>
 #include <filesystem>
+#include <random>
 #include <thread>
 
 #include <sys/wait.h>
@@ -10,9 +13,12 @@
 
 #include <gtest/gtest.h>
 
+#include "common/base/bytes.hpp"
 #include "common/base/file.hpp"
+#include "common/sensors/io/posture_source.hpp"
 #include "common/sensors/random.hpp"
 #include "common/sensors/recording.hpp"
+#include "tests/sensors/humanoid.hpp"
 #include "tests/support/test_support.hpp"
 
 namespace vistel {
@@ -181,12 +187,38 @@ TEST(Recording, TruncatedAtEveryLength) {
     if (!rec->complete) {
       EXPECT_EQ(rec->stop_offset, last_end) << len;
       EXPECT_NE(rec->stop_reason.find("truncated"), std::string::npos) << rec->stop_reason;
+      ASSERT_EQ(rec->damage.size(), 1u) << len;
+      EXPECT_EQ(rec->damage[0].bytes, len - last_end) << len;
     }
     for (std::size_t i = 0; i < rec->frames.size(); ++i) expectFrameEq(frames[i], rec->frames[i]);
   }
 }
 
-TEST(Recording, CorruptedAnywhereKeepsTheRecordsBefore) {
+// Damage entries lie inside the file, in order, apart, and add up to skipped_bytes; the
+// summary names the source and the first offset.
+void expectConsistentDamage(const Recording& rec, std::size_t file_size, std::string_view source) {
+  EXPECT_EQ(rec.complete, rec.damage.empty());
+  EXPECT_EQ(rec.complete, rec.stop_reason.empty());
+  std::uint64_t sum = 0;
+  std::uint64_t previous_end = 12;
+  for (const RecordingDamage& d : rec.damage) {
+    EXPECT_GE(d.offset, previous_end);
+    EXPECT_GT(d.bytes, 0u);
+    EXPECT_LE(d.offset + d.bytes, file_size);
+    EXPECT_FALSE(d.why.empty());
+    previous_end = d.offset + d.bytes;
+    sum += d.bytes;
+  }
+  EXPECT_EQ(sum, rec.skipped_bytes);
+  if (!rec.complete) {
+    EXPECT_EQ(rec.stop_offset, rec.damage.front().offset);
+    EXPECT_NE(rec.stop_reason.find(source), std::string::npos) << rec.stop_reason;
+    EXPECT_NE(rec.stop_reason.find(fmt::format("at byte {}", rec.stop_offset)), std::string::npos)
+        << rec.stop_reason;
+  }
+}
+
+TEST(Recording, CorruptedAnywhereLosesOnlyThatRecord) {
   std::vector<SensorFrame> frames;
   std::vector<std::size_t> ends;
   std::size_t header_end = 0;
@@ -201,13 +233,28 @@ TEST(Recording, CorruptedAnywhereKeepsTheRecordsBefore) {
         continue;
       }
       ASSERT_TRUE(rec.ok()) << at;
-      std::size_t record = 0;  // the record the flipped byte is in
+      std::size_t record = 0;  // the record the flipped byte is in (8 is the calibration)
       while (ends[record] <= at) ++record;
-      const std::size_t want_frames = record > 8 ? record - 1 : record;
-      EXPECT_FALSE(rec->complete) << at;
-      EXPECT_EQ(rec->frames.size(), want_frames) << at << ": " << rec->stop_reason;
-      EXPECT_EQ(rec->stop_offset, record == 0 ? header_end : ends[record - 1]) << at;
-      EXPECT_NE(rec->stop_reason.find("bad.vrec"), std::string::npos);
+      const std::size_t start = record == 0 ? header_end : ends[record - 1];
+      ASSERT_FALSE(rec->complete) << at;
+      ASSERT_EQ(rec->damage.size(), 1u) << at << ": " << rec->stop_reason;
+      EXPECT_EQ(rec->damage[0].offset, start) << at;
+      EXPECT_EQ(rec->damage[0].bytes, ends[record] - start) << at;
+      EXPECT_EQ(rec->damage[0].record, record + 1) << at;
+      EXPECT_EQ(rec->frames.size(), record == 8 ? 20u : 19u) << at;
+      EXPECT_EQ(rec->calibrations.size(), record == 8 ? 0u : 1u) << at;
+      // The other frames, in order.
+      std::size_t k = 0;
+      for (std::size_t i = 0; i < frames.size(); ++i) {
+        const std::size_t frame_record = i < 8 ? i : i + 1;
+        if (frame_record == record) continue;
+        ASSERT_LT(k, rec->frames.size());
+        expectFrameEq(frames[i], rec->frames[k++]);
+      }
+      if (record != 8) {
+        EXPECT_EQ(rec->calibration_after[0], record < 8 ? 7u : 8u) << at;
+      }
+      expectConsistentDamage(*rec, bad.size(), "bad.vrec");
     }
   }
   // Not a recording at all.
@@ -217,6 +264,239 @@ TEST(Recording, CorruptedAnywhereKeepsTheRecordsBefore) {
   const auto rec = decodeRecording(future, "future.vrec");
   ASSERT_FALSE(rec.ok());
   EXPECT_NE(rec.error().message.find("version 99"), std::string::npos);
+}
+
+// A session of 360 frames (12 s at 30 Hz) with a calibration record after frame 30.
+std::vector<std::uint8_t> longSession(std::vector<SensorFrame>& frames,
+                                      std::vector<std::size_t>& starts,
+                                      const RecordingHeader& header = sampleHeader()) {
+  SimRandom rng(5);
+  std::vector<std::uint8_t> bytes;
+  encodeRecordingFileHeader(bytes);
+  encodeHeaderRecord(header, bytes);
+  for (std::uint64_t i = 0; i < 360; ++i) {
+    frames.push_back(randomFrame(rng, i));
+    starts.push_back(bytes.size());
+    encodeFrameRecord(frames.back(), bytes);
+    if (i == 30) {
+      CalibrationRecord c;
+      c.pose = "standard";
+      encodeCalibrationRecord(c, bytes);
+    }
+  }
+  return bytes;
+}
+
+TEST(Recording, OneFlippedBitAtRecordFiveLosesOneFrame) {
+  std::vector<SensorFrame> frames;
+  std::vector<std::size_t> starts;
+  const auto bytes = longSession(frames, starts);
+  // Record 5 is frame 4 (record 0 is the header); flip a bit in its size, its payload
+  // and its checksum in turn.
+  const std::size_t start = starts[4];
+  const std::size_t length = starts[5] - start;
+  for (std::size_t at : {start + 1, start + 4, start + 100, start + length - 2}) {
+    std::vector<std::uint8_t> bad = bytes;
+    bad[at] ^= 0x10;
+    const auto rec = decodeRecording(bad, "flipped.vrec");
+    ASSERT_TRUE(rec.ok()) << rec.error().message;
+    EXPECT_GE(rec->frames.size(), 355u);
+    EXPECT_EQ(rec->frames.size(), 359u) << rec->stop_reason;
+    EXPECT_EQ(rec->calibrations.size(), 1u);
+    EXPECT_EQ(rec->calibration_after[0], 30u);
+    ASSERT_EQ(rec->damage.size(), 1u) << rec->stop_reason;
+    EXPECT_EQ(rec->damage[0].record, 5u);
+    EXPECT_EQ(rec->damage[0].offset, start);
+    EXPECT_EQ(rec->damage[0].bytes, length);
+    EXPECT_EQ(rec->skipped_bytes, length);
+    EXPECT_NE(rec->stop_reason.find(fmt::format("record 5 at byte {}", start)), std::string::npos)
+        << rec->stop_reason;
+    for (std::size_t i = 0; i < rec->frames.size(); ++i) {
+      EXPECT_EQ(rec->frames[i].sequence, i < 4 ? i : i + 1);
+    }
+    expectConsistentDamage(*rec, bad.size(), "flipped.vrec");
+
+    // Replayed: every good frame, then an end that names the damage.
+    RecordingSource source(std::move(*rec), "flipped.vrec");
+    SensorFrame f;
+    int n = 0;
+    PollResult r;
+    while ((r = source.poll(0.0, f)).isFrame()) ++n;
+    EXPECT_EQ(n, 359);
+    EXPECT_EQ(r.status, PollStatus::kEnd);
+    EXPECT_NE(r.message.find(fmt::format("at byte {}", start)), std::string::npos) << r.message;
+    EXPECT_NE(source.describe().find("skipped"), std::string::npos) << source.describe();
+  }
+}
+
+TEST(Recording, PostureSourceReportsWhatTheReaderSkipped) {
+  std::vector<SensorFrame> frames;
+  std::vector<std::size_t> starts;
+  RecordingHeader header = sampleHeader();
+  header.calibration.reset();  // (its random readings would not calibrate the humanoid)
+  std::vector<std::uint8_t> bytes = longSession(frames, starts, header);
+  bytes[starts[4] + 100] ^= 0x10;
+  const std::string path = test::scratchDir() + "/damaged.vrec";
+  ASSERT_TRUE(writeFileBytes(path, bytes).ok());
+  PostureSourceOptions options;
+  options.realtime = false;
+  auto source = openPostureSource(path, test::makeHumanoid(false), options);
+  ASSERT_TRUE(source.ok()) << source.error().message;
+  // The caller's log gets where and why, before the first frame.
+  const std::string status = (*source)->status();
+  EXPECT_NE(status.find("recording damaged"), std::string::npos) << status;
+  EXPECT_NE(status.find(fmt::format("record 5 at byte {}", starts[4])), std::string::npos)
+      << status;
+  EXPECT_NE((*source)->describe().find("skipped"), std::string::npos) << (*source)->describe();
+  Posture p;
+  int n = 0;
+  PollResult r;
+  while ((r = (*source)->poll(0.0, p)).isFrame()) ++n;
+  EXPECT_EQ(n, 359);
+  EXPECT_EQ(r.status, PollStatus::kEnd) << r.message;
+}
+
+TEST(Recording, CutInTheLastRecordKeepsEveryEarlierFrame) {
+  std::vector<SensorFrame> frames;
+  std::vector<std::size_t> starts;
+  const auto bytes = longSession(frames, starts);
+  const std::size_t last = starts.back();
+  for (std::size_t len : {last + 1, last + 5, last + 100, bytes.size() - 1}) {
+    const auto rec = decodeRecording(std::span(bytes).first(len), "cut.vrec");
+    ASSERT_TRUE(rec.ok()) << rec.error().message;
+    EXPECT_EQ(rec->frames.size(), 359u) << len;
+    ASSERT_EQ(rec->damage.size(), 1u) << rec->stop_reason;
+    EXPECT_EQ(rec->damage[0].offset, last);
+    EXPECT_EQ(rec->damage[0].bytes, len - last);
+    EXPECT_NE(rec->damage[0].why.find("truncated"), std::string::npos) << rec->damage[0].why;
+    expectConsistentDamage(*rec, len, "cut.vrec");
+  }
+}
+
+TEST(Recording, SlippedBytesResynchronise) {
+  std::vector<SensorFrame> frames;
+  std::vector<std::size_t> starts;
+  const auto bytes = longSession(frames, starts);
+  // Three bytes inserted in frame 100, seven dropped from frame 200, frame 300 zeroed.
+  std::vector<std::uint8_t> bad(bytes.begin(), bytes.begin() + starts[100] + 50);
+  bad.insert(bad.end(), {0xde, 0xad, 0x02});
+  bad.insert(bad.end(), bytes.begin() + starts[100] + 50, bytes.begin() + starts[200] + 20);
+  bad.insert(bad.end(), bytes.begin() + starts[200] + 27, bytes.end());
+  const std::size_t frame_300 = starts[300] - 4;  // where it starts now (3 in, 7 out)
+  std::fill(bad.begin() + static_cast<std::ptrdiff_t>(frame_300),
+            bad.begin() + static_cast<std::ptrdiff_t>(frame_300 + starts[301] - starts[300]), 0);
+  const auto rec = decodeRecording(bad, "slipped.vrec");
+  ASSERT_TRUE(rec.ok()) << rec.error().message;
+  EXPECT_EQ(rec->frames.size(), 357u) << rec->stop_reason;
+  ASSERT_EQ(rec->damage.size(), 3u) << rec->stop_reason;
+  EXPECT_EQ(rec->damage[0].offset, starts[100]);
+  EXPECT_EQ(rec->damage[0].bytes, starts[101] - starts[100] + 3);
+  EXPECT_EQ(rec->damage[1].offset, starts[200] + 3);
+  EXPECT_EQ(rec->damage[2].offset, frame_300);
+  EXPECT_NE(rec->stop_reason.find("skipped"), std::string::npos);
+  std::uint64_t previous = 0;
+  for (const SensorFrame& f : rec->frames) {
+    EXPECT_TRUE(f.sequence == 0 || f.sequence > previous);
+    EXPECT_NE(f.sequence, 100u);
+    EXPECT_NE(f.sequence, 200u);
+    EXPECT_NE(f.sequence, 300u);
+    previous = f.sequence;
+  }
+  expectConsistentDamage(*rec, bad.size(), "slipped.vrec");
+}
+
+TEST(Recording, RecordWithBadValuesIsSkippedExactly) {
+  SimRandom rng(9);
+  std::vector<std::uint8_t> bytes;
+  encodeRecordingFileHeader(bytes);
+  encodeHeaderRecord(sampleHeader(), bytes);
+  std::vector<std::size_t> starts;
+  for (std::uint64_t i = 0; i < 6; ++i) {
+    SensorFrame f = randomFrame(rng, i);
+    if (i == 2) f.time = std::nan("");          // well framed, a bad value
+    if (i == 4) f.gloves[0].angles[3] = 42.0f;  // out of range
+    starts.push_back(bytes.size());
+    encodeFrameRecord(f, bytes);
+  }
+  starts.push_back(bytes.size());
+  // A record of a type this build does not know, with a good checksum.
+  const std::size_t unknown = bytes.size();
+  const std::uint8_t record[] = {3, 0, 0, 0, 9, 'a', 'b', 'c'};
+  bytes.insert(bytes.end(), std::begin(record), std::end(record));
+  const std::uint32_t crc = crc32(std::span<const std::uint8_t>(bytes).subspan(unknown + 4, 4));
+  ByteWriter(bytes).u32(crc);
+  encodeFrameRecord(randomFrame(rng, 6), bytes);
+
+  const auto rec = decodeRecording(bytes, "values.vrec");
+  ASSERT_TRUE(rec.ok()) << rec.error().message;
+  EXPECT_EQ(rec->frames.size(), 5u);
+  ASSERT_EQ(rec->damage.size(), 3u) << rec->stop_reason;
+  EXPECT_EQ(rec->damage[0].offset, starts[2]);
+  EXPECT_EQ(rec->damage[0].bytes, starts[3] - starts[2]);
+  EXPECT_EQ(rec->damage[1].offset, starts[4]);
+  EXPECT_NE(rec->damage[1].why.find("glove angle"), std::string::npos) << rec->damage[1].why;
+  EXPECT_EQ(rec->damage[2].offset, unknown);
+  EXPECT_EQ(rec->damage[2].bytes, 12u);
+  EXPECT_NE(rec->damage[2].why.find("unknown record type 9"), std::string::npos);
+  EXPECT_EQ(rec->frames.back().sequence, 6u);
+  expectConsistentDamage(*rec, bytes.size(), "values.vrec");
+}
+
+// Random damage of every kind: flips, overwritten runs, cuts, slips, spliced copies. The
+// reader never fails after an intact header, keeps only true frames in order, and reports
+// consistently (run under ASan+UBSan by scripts/test).
+TEST(Recording, RandomDamageNeverBreaksTheReader) {
+  std::vector<SensorFrame> frames;
+  std::vector<std::size_t> starts;
+  const auto bytes = longSession(frames, starts);
+  std::mt19937 rng(77);
+  auto below = [&](std::size_t n) {
+    return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng);
+  };
+  for (int trial = 0; trial < 150; ++trial) {
+    std::vector<std::uint8_t> bad = bytes;
+    const int edits = 1 + static_cast<int>(below(12));
+    for (int e = 0; e < edits && bad.size() > starts[0] + 16; ++e) {
+      const std::size_t at = starts[0] + below(bad.size() - starts[0]);
+      switch (below(5)) {
+        case 0:
+          bad[at] ^= static_cast<std::uint8_t>(1u << below(8));
+          break;
+        case 1:
+          for (std::size_t k = at; k < std::min(bad.size(), at + 1 + below(600)); ++k)
+            bad[k] = static_cast<std::uint8_t>(below(256));
+          break;
+        case 2:
+          bad.erase(
+              bad.begin() + static_cast<std::ptrdiff_t>(at),
+              bad.begin() + static_cast<std::ptrdiff_t>(std::min(bad.size(), at + 1 + below(40))));
+          break;
+        case 3:
+          bad.insert(bad.begin() + static_cast<std::ptrdiff_t>(at), 1 + below(40),
+                     static_cast<std::uint8_t>(below(256)));
+          break;
+        default: {  // a copy of another stretch of the file
+          const std::size_t from = starts[0] + below(bytes.size() - starts[0]);
+          const std::size_t n = std::min(bytes.size() - from, 1 + below(1500));
+          bad.insert(bad.begin() + static_cast<std::ptrdiff_t>(at),
+                     bytes.begin() + static_cast<std::ptrdiff_t>(from),
+                     bytes.begin() + static_cast<std::ptrdiff_t>(from + n));
+          break;
+        }
+      }
+    }
+    if (below(4) == 0) bad.resize(starts[0] + below(bad.size() - starts[0]));
+    const auto rec = decodeRecording(bad, "random.vrec");
+    ASSERT_TRUE(rec.ok()) << trial << ": " << rec.error().message;
+    for (const SensorFrame& f : rec->frames) {
+      ASSERT_LT(f.sequence, frames.size()) << trial;
+      expectFrameEq(frames[f.sequence], f);
+    }
+    expectConsistentDamage(*rec, bad.size(), "random.vrec");
+    if (edits == 1 && bad.size() == bytes.size()) {
+      EXPECT_GE(rec->frames.size(), 355u) << trial;
+    }
+  }
 }
 
 TEST(Recording, WriterKilledMidStreamLosesAtMostOneRecord) {
@@ -247,6 +527,7 @@ TEST(Recording, WriterKilledMidStreamLosesAtMostOneRecord) {
   EXPECT_GT(rec->frames.size(), 100u);
   if (!rec->complete) {
     EXPECT_NE(rec->stop_reason.find("truncated"), std::string::npos) << rec->stop_reason;
+    EXPECT_EQ(rec->damage.size(), 1u) << rec->stop_reason;
   }
   for (std::size_t i = 0; i < rec->frames.size(); ++i) ASSERT_EQ(rec->frames[i].sequence, i);
 }

@@ -121,6 +121,11 @@ class SolvingSource final : public PostureSource {
     status_ = "calibrating: hold the calibration pose";
   }
   bool calibrated() const override { return solver_.has_value(); }
+  // A notable event from opening (a damaged recording's report), ahead of what the opening
+  // said already (a recorded calibration), until the next event.
+  void noteStatus(const std::string& status) {
+    status_ = status_.empty() ? status : status + "; " + status_;
+  }
 
   Status startRecording(const std::string& path) override {
     RecordingHeader header;
@@ -342,6 +347,7 @@ Result<std::unique_ptr<PostureSource>> openPostureSource(const std::string& spec
   std::unique_ptr<SensorSource> source;
   Posture calibration_posture = standardCalibrationPosture(avatar, *roles);
   std::string pose_name = "standard";
+  std::string opening_status;  // a notable event of opening, for status()
   Kind kind = Kind::kDevices;
   std::optional<CalibrationRecord> recorded_calibration;
   std::size_t recorded_after = 0;  // frames before the recorded calibration
@@ -391,6 +397,8 @@ Result<std::unique_ptr<PostureSource>> openPostureSource(const std::string& spec
       }
     }
     pose_name = recorded_calibration ? recorded_calibration->pose : "standard";
+    // What the reader skipped (where and why), for the caller's log.
+    if (!rec->complete) opening_status = "recording damaged: " + rec->stop_reason;
     source = std::make_unique<RecordingSource>(std::move(*rec), path);
   } else {
     Result<std::unique_ptr<SensorSource>> devices = openSensorDevices(setup);
@@ -408,6 +416,7 @@ Result<std::unique_ptr<PostureSource>> openPostureSource(const std::string& spec
   } else if (recorded_calibration) {
     out->scheduleCalibration(*recorded_calibration, recorded_after);
   }
+  if (!opening_status.empty()) out->noteStatus(opening_status);
   if (!options.record_path.empty()) {
     if (Status s = out->startRecording(options.record_path); !s) return s.error();
   }

@@ -59,7 +59,8 @@ class PostureSource {
   // Called with every raw frame before it is solved.
   virtual void setFrameHook(std::function<void(const SensorFrame&)> hook) = 0;
   virtual const SensorFrame& lastFrame() const = 0;
-  // What the source is, and the last notable event (calibrated, a glove unplugged, ...).
+  // What the source is, and the last notable event (calibrated, a glove unplugged, ...;
+  // from the start: what the reader of a damaged recording skipped, where and why).
   virtual std::string describe() const = 0;
   virtual std::string status() const = 0;
 };
