@@ -6,7 +6,8 @@
 // - Seeds: every target generates its own seed inputs with the project's encoders, so no
 //   data files are copied into the repository. `fuzz_X --write-seeds=DIR` writes them into
 //   DIR and exits (libFuzzer ignores arguments that start with "--"); scripts/fuzz does
-//   this before each run.
+//   this before each run. The same call registers the generator for the replay driver
+//   (replay_main.cpp), which runs the seeds and mutants of them as an ordinary test.
 // - Chunks: stream decoders are fed the input in pieces whose sizes come from a small
 //   deterministic sequence, so split records and resynchronisation are exercised without
 //   spending input bytes on the split.
@@ -19,6 +20,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -54,10 +56,18 @@ inline std::string_view textOf(const Seed& seed) {
   return {reinterpret_cast<const char*>(seed.bytes.data()), seed.bytes.size()};
 }
 
+// The target's seed generator, once LLVMFuzzerInitialize has run (empty before).
+inline std::function<std::vector<Seed>()>& registeredSeeds() {
+  static std::function<std::vector<Seed>()> make_seeds;
+  return make_seeds;
+}
+
 // Call from LLVMFuzzerInitialize: with --write-seeds=DIR among the arguments, writes
-// make_seeds() into DIR (which must exist) and exits; otherwise returns.
+// make_seeds() into DIR (which must exist) and exits; otherwise registers make_seeds (for
+// the replay driver) and returns.
 template <typename MakeSeeds>
 void writeSeedsIfAsked(int argc, char** argv, MakeSeeds make_seeds) {
+  registeredSeeds() = make_seeds;
   constexpr std::string_view kFlag = "--write-seeds=";
   for (int i = 1; i < argc; ++i) {
     const std::string_view arg(argv[i]);

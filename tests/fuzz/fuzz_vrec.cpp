@@ -1,13 +1,15 @@
 // libFuzzer target: decodeRecording (common/sensors/recording.hpp) on arbitrary bytes, as a
 // .vrec file. Properties: nothing crashes, leaks or reads out of bounds; a rejected file
 // gets a message naming the source; an accepted one keeps the header's invariants
-// (complete <=> no stop reason, the stop offset inside the file, calibrations placed
+// (complete <=> no damage <=> no stop reason; the damaged stretches inside the file, in
+// order, apart, adding up to skipped_bytes, the first at stop_offset; calibrations placed
 // between frames, finite times, unit orientations on valid stations, glove angles within
 // 10 rad), and re-encoding it record by record gives a complete recording that encodes to
 // the same bytes again.
 //
 // Every record carries a CRC-32, so the custom mutator repairs the checksums of most
-// mutants (fuzz_support.hpp). Seeds: small recordings written by the recording encoders.
+// mutants (fuzz_support.hpp). Seeds: small recordings written by the recording encoders,
+// one cut short and one with a damaged record in the middle (the resynchronisation).
 #include <cmath>
 #include <cstdint>
 #include <span>
@@ -100,11 +102,18 @@ std::vector<fuzz::Seed> makeSeeds() {
   check(decodeRecording(header_only, "seed")->complete, "a seed decodes");
   check(decodeRecording(plain, "seed")->frames.size() == 4, "a seed decodes");
   check(decodeRecording(calibrated, "seed")->header.calibration.has_value(), "a seed decodes");
+  std::vector<std::uint8_t> damaged = plain;  // a byte of the second frame overwritten
+  const std::size_t second_frame = header_only.size() + (plain.size() - header_only.size()) / 5;
+  damaged[second_frame + 30] ^= 0x5a;
   check(!decodeRecording(cut, "seed")->complete, "the cut seed is incomplete");
+  const auto resynced = decodeRecording(damaged, "seed");
+  check(resynced->damage.size() == 1 && resynced->frames.size() >= 3,
+        "the damaged seed resynchronises");
   return {{"header_only.vrec", header_only},
           {"frames_and_calibration.vrec", plain},
           {"header_calibration.vrec", calibrated},
-          {"cut_short.vrec", cut}};
+          {"cut_short.vrec", cut},
+          {"damaged_middle.vrec", damaged}};
 }
 
 // ---- properties --------------------------------------------------------------------------
@@ -165,8 +174,20 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
   // Invariants of what was kept.
   check(rec->complete == rec->stop_reason.empty(), "complete <=> no stop reason");
+  check(rec->complete == rec->damage.empty(), "complete <=> no damage");
   check(rec->complete || (rec->stop_offset >= kFileHeader && rec->stop_offset < size),
         "the stop offset lies inside the file");
+  std::uint64_t skipped = 0;
+  std::uint64_t previous_end = kFileHeader;
+  for (const RecordingDamage& d : rec->damage) {
+    check(d.bytes > 0 && d.offset >= previous_end && d.offset + d.bytes <= size && !d.why.empty(),
+          "damaged stretches lie in the file, in order, apart, with a reason");
+    previous_end = d.offset + d.bytes;
+    skipped += d.bytes;
+  }
+  check(skipped == rec->skipped_bytes, "skipped_bytes adds up the stretches");
+  check(rec->complete || rec->stop_offset == rec->damage.front().offset,
+        "stop_offset is the first damage");
   check(rec->calibration_after.size() == rec->calibrations.size(), "a position per calibration");
   for (std::size_t i = 0; i < rec->calibration_after.size(); ++i) {
     check(rec->calibration_after[i] <= rec->frames.size() &&
