@@ -207,6 +207,7 @@ class Parser {
     BvhJoint joint;
     joint.name = std::string(name.text);
     joint.parent = parent;
+    joint.first_channel = clip_.channel_count;  // (a joint without CHANNELS has none)
     clip_.joints.push_back(std::move(joint));
     return expect("{", fmt::format("after joint name '{}'", shown(name.text)));
   }

@@ -556,3 +556,27 @@ TEST(BvhExport, NonDepthFirstSkeletonIsWrittenDepthFirst) {
 
 }  // namespace
 }  // namespace vistel
+
+namespace vistel {
+namespace {
+
+// A joint without a CHANNELS line has no channels, and its first channel is where the
+// channels before it end (the next joint's start), not 0 (a fuzzer's find).
+TEST(Bvh, JointWithoutChannelsStartsAtTheRunningCount) {
+  const char* text =
+      "HIERARCHY\nROOT Hips\n{\n\tOFFSET 0 0 0\n\tCHANNELS 6 Xposition Yposition Zposition "
+      "Zrotation Xrotation Yrotation\n\tJOINT Leg\n\t{\n\t\tOFFSET 0 -1 0\n\t\tJOINT Foot\n\t\t{\n"
+      "\t\t\tOFFSET 0 -1 0\n\t\t\tCHANNELS 3 Zrotation Xrotation Yrotation\n\t\t\tEnd Site\n"
+      "\t\t\t{\n\t\t\t\tOFFSET 0 0 1\n\t\t\t}\n\t\t}\n\t}\n}\nMOTION\nFrames: 1\n"
+      "Frame Time: 0.1\n0 0 0 0 0 0 10 20 30\n";
+  Result<MotionClip> clip = parseBvh(text, "no_channels.bvh");
+  ASSERT_TRUE(clip.ok()) << clip.error().message;
+  ASSERT_EQ(clip->joints.size(), 3u);
+  EXPECT_TRUE(clip->joints[1].channels.empty());
+  EXPECT_EQ(clip->joints[1].first_channel, 6);
+  EXPECT_EQ(clip->joints[2].first_channel, 6);
+  EXPECT_EQ(clip->channel_count, 9);
+}
+
+}  // namespace
+}  // namespace vistel
