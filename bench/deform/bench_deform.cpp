@@ -293,6 +293,7 @@ void deformBench(benchmark::State& state, Scene* s) {
       in.rigid_positions = rigid_pos;
       in.rigid_normals = rigid_nrm;
       in.indices = s->avatar.skin.indices;
+      in.rest_positions = s->avatar.skin.positions;
       in.time = static_cast<double>(frames) * dt;
       deformSkin(s->model, views, 0, list, in, ds, options);
       benchmark::DoNotOptimize(ds.positions.data());

@@ -1075,6 +1075,25 @@ inline float writeSolved(const Frame& fr, int v, const glm::vec3& p0, const glm:
   return s_out;
 }
 
+// How far vertex v may end from its skinned position (DeformOptions::move_margin): its drift
+// from where each of its own primitives' bones alone would carry its rest position (its
+// own field, calibrated at rest, moves with those bones, so it can ask for no more), its
+// rigid-pose penetration and the bulge this frame allows, plus the margin. Infinite when
+// moves are not bounded.
+float moveAllowance(const Frame& fr, std::size_t vi) {
+  const DeformOptions& opt = *fr.opt;
+  if (opt.move_margin < 0.0f || fr.in->rest_positions.empty()) return INFINITY;
+  const glm::vec4 rest(fr.in->rest_positions[vi], 1.0f);
+  const glm::vec3 p = fr.in->rigid_positions[vi];
+  float drift = 0.0f;
+  for (const std::int16_t prim : fr.model->calibration.prims[vi]) {
+    if (prim < 0) continue;
+    const glm::vec3 carried(fr.st->prim_to_world[static_cast<std::size_t>(prim)] * rest);
+    drift = std::max(drift, glm::length(p - carried));
+  }
+  return drift + fr.st->depth[vi] + fr.st->bulge_allowance + opt.move_margin;
+}
+
 // Pass B's short way for the commonest solved vertex, the lone limb vertex: a limb vertex of
 // one primitive (no bone), not fixed (DeformState::fixed_kind), that has no collider and no
 // elastic memory this frame and is projected along its normal, as it was last frame (see
@@ -1150,7 +1169,10 @@ bool solveLoneLimb(const Frame& fr, int v, const LoneStart& start, DeformCounter
   if (steps > 0) ++cnt.iterating_vertices;
   std::uint8_t flags = 0;
   float s_sol = 0.0f;
-  if (res.found) {
+  if (res.found && std::abs(res.s) > moveAllowance(fr, vi)) {
+    flags |= kVertexHeld;  // a root beyond what its own field can ask: see moveAllowance
+    ++cnt.held_vertices;
+  } else if (res.found) {
     s_sol = res.s;
   } else {
     flags |= kVertexUnsolved;
@@ -1332,6 +1354,20 @@ void passSolve(Frame& fr, int first, int last, DeformCounters& cnt) {
       res.s = 0.0f;
       flags |= kVertexHeld;
       ++cnt.held_vertices;
+    }
+    // A root beyond what the vertex's own field and its contact can ask (see moveAllowance):
+    // a vertex that resolves no penetration stays rigid; one that does goes that far.
+    if (res.found && !held) {
+      const float limit = moveAllowance(fr, vi);
+      if (std::abs(res.s) > limit) {
+        if (st.depth[vi] > 0.0f) {
+          res.s = std::copysign(limit, res.s);
+        } else {
+          res.s = 0.0f;
+          flags |= kVertexHeld;
+          ++cnt.held_vertices;
+        }
+      }
     }
 
     float s_sol = res.found ? res.s : 0.0f;
@@ -1803,6 +1839,7 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
   st.pressure.assign(nv, 0.0f);
   st.depth.assign(nv, 0.0f);
   st.flags.assign(nv, 0);
+  st.prim_to_world.assign(model.primitives.items.size(), glm::mat4(1.0f));
   st.relaxed.assign(nv, glm::vec3(0.0f));
   st.relax_list.assign(nv, 0);
   st.contact_list.assign(nv, 0);
@@ -1943,6 +1980,15 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
     std::fill(st.depth.begin(), st.depth.end(), 0.0f);
     std::fill(st.pressure.begin(), st.pressure.end(), 0.0f);
     std::fill(st.cand_count.begin(), st.cand_count.end(), std::uint8_t{0});
+  }
+
+  // The move bound's per-frame parts (see moveAllowance).
+  if (opt.move_margin >= 0.0f && in.rest_positions.size() == static_cast<std::size_t>(fr.nvert)) {
+    for (std::size_t i = 0; i < fr.posed->items.size(); ++i)
+      st.prim_to_world[i] = glm::inverse(fr.posed->items[i].to_bind);
+    const float deepest =
+        st.colliders.empty() ? 0.0f : *std::max_element(st.depth.begin(), st.depth.end());
+    st.bulge_allowance = 2.0f * model.primitives.propagation_amplitude * deepest;
   }
 
   lap(times.penetration);

@@ -86,6 +86,14 @@ struct DeformOptions {
                                       // P' - P (0: off; see the header)
   float smooth_rate = 0.5f;           // fraction of the way to the one-ring's mean
                                       // correction per pass
+  float move_margin = 0.005f;         // with DeformInput::rest_positions, no vertex ends
+                                      // farther from its skinned position than its drift (how
+                                      // far the skinning put it from where its own primitives'
+                                      // bones alone carry it: all its own field can correct),
+                                      // plus its rigid-pose penetration depth, plus the bulge
+                                      // the body's deepest contact allows, plus this (m); a
+                                      // root beyond leaves it rigid (held) or, in contact, at
+                                      // that distance. Negative: no bound
   int chunk_size = 512;               // vertices per parallel task (results do not depend on it
                                       // nor on the thread count)
   bool time_phases = false;           // measure each phase's wall time (DeformCounters::
@@ -97,6 +105,9 @@ struct DeformInput {
   std::span<const glm::vec3> rigid_normals;    // skinned unit normals (nvert), world
   std::span<const std::uint32_t> indices;      // the skin's triangles (3 * ntri)
   double time = 0.0;                           // seconds; drives viscoelastic recovery
+  std::span<const glm::vec3> rest_positions;   // the skin at rest, bind-pose model space
+                                               // (nvert; empty: moves are not bounded, see
+                                               // DeformOptions::move_margin)
 };
 
 // Wall time of each phase of one deformSkin call, seconds (see DeformOptions::time_phases).
@@ -264,6 +275,9 @@ struct DeformState {
                                            // a final Newton step of where) the last
                                            // solve left them (NaN: not known)
   std::vector<DeformCounters> chunk_counters;
+  std::vector<glm::mat4> prim_to_world;  // (nprim) bind-pose model space -> world, per
+                                         // primitive's bone this frame
+  float bulge_allowance = 0.0f;          // this frame: the bulge any vertex may take (m)
   // The own primitives of joint vertices and of limb vertices with a bone, packed to be
   // evaluated together (field_lanes.hpp): a set per distinct (p0, p1, p2, bone).
   std::vector<std::int16_t> lane_set;                       // (nvert) the vertex's set, or -1

@@ -150,6 +150,7 @@ void DeformScene::Impl::deformWorld(int index, TaskPool* task_pool) {
   input.rigid_positions = b.rigid_pos;
   input.rigid_normals = b.rigid_nrm;
   input.indices = b.avatar->skin.indices;
+  input.rest_positions = b.avatar->skin.positions;
   input.time = time;
   deformSkin(*b.model, views, index, list, input, b.state, options.deform, task_pool);
   b.deformed = true;

@@ -126,6 +126,7 @@ DeformInput Body::input(double time) const {
   in.rigid_positions = rigid_pos;
   in.rigid_normals = rigid_nrm;
   in.indices = mesh.indices;
+  in.rest_positions = mesh.positions;
   in.time = time;
   return in;
 }

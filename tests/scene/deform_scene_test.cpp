@@ -83,7 +83,7 @@ TEST(DeformScene, StepEqualsTheThreeStepsByHand) {
   for (int i = 0; i < 2; ++i) {
     Manual& b = m[static_cast<std::size_t>(i)];
     const AvatarModel& a = *scene.body(i).avatar;
-    DeformInput in{b.pos, b.nrm, a.skin.indices, 0.0};
+    DeformInput in{b.pos, b.nrm, a.skin.indices, 0.0, a.skin.positions};
     deformSkin(*a.implicit, views, i, list, in, b.state);
     states.push_back(&b.state);
     EXPECT_TRUE(sameBits(b.pos, scene.rigidPositions(i))) << "body " << i;
