@@ -29,6 +29,11 @@
 //     Also a departure from DESIGN.md, which leaves each vertex on its own surface.
 //   Step 3: normals of the deformed skin, contact flags and areas, pressures and reaction
 //     forces per partner body.
+// The code follows these steps: deform.cpp the driver (deformSkin: setup, pass A, pass B,
+// relaxation, smoothing, Step 3, each a call), collision_terms.hpp the paper's terms,
+// vertex_solve.* the vertex solve (pass B), penetration_pass.cpp pass A (candidates,
+// rigid-pose penetrations, p_max), relaxation.* relaxation and smoothing, contact_forces.*
+// Step 3, deform_scratch.* the acceleration machinery's scratch (internal headers).
 //
 // Space: world (rigid positions, normals and posed primitives must share it), metres,
 // seconds. Cost: O(n) in skin vertices; a limb vertex skinned by its primitive's bone alone
@@ -41,13 +46,14 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
 #include <glm/glm.hpp>
 
 #include "common/base/result.hpp"
-#include "common/deform/field_lanes.hpp"
+#include "common/deform/collision_terms.hpp"
 #include "common/deform/implicit_model.hpp"
 #include "common/deform/interactions.hpp"
 #include "common/deform/posed_primitives.hpp"
@@ -98,6 +104,11 @@ struct DeformOptions {
                                       // nor on the thread count)
   bool time_phases = false;           // measure each phase's wall time (DeformCounters::
                                       // phase_seconds; a clock read between phases)
+  bool reference = false;             // the plain scalar way, for tests: every collider of a
+                                      // vertex's interaction list tested directly per vertex
+                                      // (no patches, no vectorised culling, no field lanes, no
+                                      // lone-limb short way, no kept problems); the same
+                                      // equations, so the same result up to float rounding
 };
 
 struct DeformInput {
@@ -182,7 +193,10 @@ inline constexpr std::uint8_t kVertexHeld = 64;       // joint vertex held rigid
 inline constexpr std::uint8_t kVertexSmoothed = 128;  // moved by the smoothing of corrections
 inline constexpr int kMaxCandidates = 8;              // colliders per vertex
 
-// Everything that changes per frame for one deformed body; sized once by initDeformState.
+struct DeformScratch;  // deform_scratch.hpp (internal)
+
+// Everything that changes per frame for one deformed body, results and carried state; sized
+// once by initDeformState. Copyable (the scratch is deep-copied) and movable.
 struct DeformState {
   std::vector<glm::vec3> positions;        // deformed positions (nvert), world
   std::vector<glm::vec3> normals;          // deformed unit normals (nvert), world
@@ -201,89 +215,17 @@ struct DeformState {
   double time = 0.0;     // time of the last frame
   bool started = false;  // a frame has run (time is valid)
 
-  // Scratch, sized once (internal to deformSkin).
-  struct Collider {
-    std::uint16_t body = 0;
-    std::uint16_t prim = 0;
-    const PosedPrimitive* posed = nullptr;
-    Bounds cull;                  // support box grown by a margin: farther vertices skip it
-    float cull_distance = 0.0f;   // skeleton distance beyond which a vertex skips it
-    float inv_unit = 1.0f;        // skeleton-distance units per metre (cone-sphere: at most
-                                  // 1 / its smaller radius)
-    std::uint32_t pmax_bits = 0;  // deepest penetration this frame (float bits, >= 0)
-  };
-  std::vector<Collider> colliders;
-  std::vector<std::uint32_t> prim_collider_offsets;  // (nprim + 1)
-  std::vector<std::uint16_t> prim_colliders;
-  std::vector<std::int32_t> always_collider;  // (nprim) collider of an always-pair prim
-  std::vector<std::int16_t> always_prims;     // prims named by kPairAlways pairs
-  std::vector<std::uint32_t> vf_offsets;      // vertex -> incident faces (nvert + 1)
-  std::vector<std::uint32_t> vf_faces;
-  std::vector<std::uint32_t> face_vertices;  // the triangles (3 * ntri)
-  // Vertex patches (pass A culls colliders per patch): vertices sharing their defining
-  // primitives, in compact groups over the mesh.
-  std::vector<std::uint32_t> order;                 // (nvert) vertices, patch by patch
-  std::vector<std::uint32_t> patch_offsets;         // (npatch + 1) into order
-  std::vector<std::uint32_t> patch_always_offsets;  // (npatch + 1) into patch_always
-  std::vector<std::int16_t> patch_always;           // always-pair primitives per patch
-  std::vector<float> patch_max_w;                   // (npatch) largest calibration weight
-  std::vector<std::uint8_t> cand_count;             // candidates per vertex (nvert; bit 7:
-                                                    // more were dropped)
-  // A vertex's candidate collider, with what pass A found of it (one struct, so that a
-  // vertex's candidates share a cache line or two).
-  struct CandidateSlot {
-    float iso = 0.5f;            // the pair's threshold
-    float reach = 0.0f;          // the largest x = omega F_i - iso within the vertex's cull margin
-    float omega = 1.0f;          // the partner field's scale: its skin weight near the vertex, 1
-                                 // for a rigid partner
-    float x_rigid = -INFINITY;   // a free vertex's x = omega F_i - iso at its rigid position
-                                 // (-infinity outside the partner's box), as its solve would
-                                 // evaluate it
-    std::uint16_t collider = 0;  // index into colliders
-  };
-  std::vector<CandidateSlot> candidates;    // (nvert * kMaxCandidates)
-  std::vector<std::uint8_t> dirty;          // needs a new normal (nvert)
-  std::vector<glm::vec3> face_cross;        // twice the area-weighted normal of
-                                            // faces with a dirty vertex (nface)
-  std::vector<glm::vec3> relaxed;           // relaxation pass output (nvert)
-  std::vector<std::uint32_t> relax_list;    // (nvert) the vertices to relax, each
-                                            // chunk's from its first vertex on
-  std::vector<std::uint32_t> joint_prefix;  // (nvert + 1) joint vertices before each
-  std::vector<std::byte> relax_problems;    // room for a problem per joint vertex: the
-                                            // relaxed vertices' as pass B gathered them,
-                                            // a chunk's from joint_prefix[its first
-                                            // vertex] on in relax_list order (internal)
-  std::vector<std::uint32_t> contact_list;  // (nvert) the vertices in contact, each
-                                            // chunk's from its first vertex on
-  bool any_inelastic = false;  // a primitive is plastic or viscoelastic (free_offset is kept)
-  std::vector<std::uint8_t> fixed_kind;    // rigid limb or free vertex (nvert)
-  std::vector<std::uint8_t> resting;       // pass B: fixed, nothing near (nvert)
-  std::vector<std::uint8_t> lone_kind;     // limb vertex of one primitive, no bone, not
-                                           // fixed (nvert; see loneKind)
-  std::vector<std::uint32_t> solve_list;   // (nvert) pass B: the vertices solved the full
-                                           // way, each chunk's from its first vertex on
-  std::vector<std::uint32_t> lone_list;    // (nvert) pass B: the lone limb vertices, each
-                                           // chunk's from its first vertex on
-  std::vector<std::uint32_t> smooth_pool;  // joint vertices and the free ones
-                                           // beside them (init)
-  std::vector<std::uint32_t> smooth_list;  // those smoothed this frame (capacity:
-                                           // the pool's size)
-  std::vector<glm::vec3> correction;       // their corrections (nvert), and the
-  std::vector<glm::vec3> correction_next;  // next pass's (Jacobi)
-  std::vector<std::uint8_t> smooth_mark;   // in smooth_list (nvert; 0 between frames)
-  std::vector<glm::vec3> field_gradient;   // relaxed vertices: grad g where (or within
-                                           // a final Newton step of where) the last
-                                           // solve left them (NaN: not known)
-  std::vector<DeformCounters> chunk_counters;
-  std::vector<glm::mat4> prim_to_world;  // (nprim) bind-pose model space -> world, per
-                                         // primitive's bone this frame
-  float bulge_allowance = 0.0f;          // this frame: the bulge any vertex may take (m)
-  // The own primitives of joint vertices and of limb vertices with a bone, packed to be
-  // evaluated together (field_lanes.hpp): a set per distinct (p0, p1, p2, bone).
-  std::vector<std::int16_t> lane_set;                       // (nvert) the vertex's set, or -1
-  std::vector<std::array<std::int16_t, 4>> lane_set_prims;  // per set
-  std::vector<FieldLanes> own_lanes;                        // per set, packed each frame
-  std::vector<std::uint8_t> lane_set_packed;  // per set: 0 when a primitive is not covered
+  // The acceleration machinery's scratch (deform_scratch.hpp, internal to deformSkin): sized by
+  // initDeformState, deep-copied with the state; a moved-from state has none (initDeformState
+  // it again before use).
+  std::unique_ptr<DeformScratch> scratch;
+
+  DeformState();
+  ~DeformState();
+  DeformState(const DeformState& other);
+  DeformState& operator=(const DeformState& other);
+  DeformState(DeformState&& other) noexcept;
+  DeformState& operator=(DeformState&& other) noexcept;
 };
 
 // Sizes a state for a model and its skin's triangles (validated: indices < nvert). The
@@ -298,38 +240,6 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
 void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, int self,
                 const InteractionList& interactions, const DeformInput& input, DeformState& state,
                 const DeformOptions& options = {}, TaskPool* pool = nullptr);
-
-// One collision term COLL_i,v of DESIGN.md §3 in field units, as a function of
-// x = omega * F_i(P) - iso_pair (omega = w_i, the partner's skin weight near the vertex,
-// for a deformable partner, so x = 0 on the partner's skin; 1 for a rigid one):
-//   penetration zone (x > 0):          COLL = -x (so F = T where w_v D_v = omega F_i)
-//   propagation zone (-width < x <= 0): COLL = bulge * h(-x / width), h(s) = 27/4 s (1-s)^2
-//   elsewhere:                          0.
-// Continuous at both borders (x = 0 and x = -width). Step 2 weighs the penetration part
-// by relative deformability, lambda = k_v / (k_v + k_i) (k: the primitives' stiffness):
-// for lambda > 0 it solves
-//   (w_v D_v - T + bulges) - rho * max(0, x) = 0,  rho = (1 - lambda) / lambda
-// (one partner: lambda (w_v D_v - T) = (1 - lambda) x; lambda = 1/2 is the paper's common
-// surface, lambda = 1 leaves the vertex undeformed); a rigid partner (lambda = 0) is a
-// hard constraint x <= 0 solved after, which puts the vertex exactly on its surface.
-// A free vertex (no field of its own for the partner to meet) treats every soft partner
-// as rigid: it ends on the partner's skin.
-// bulge = 2 (1 - lambda) w_v a p_max (a: the set's propagation amplitude, p_max: the
-// deepest x of this partner over the body's rigid vertices this frame).
-inline float collisionTerm(float x, float bulge, float width, float* derivative = nullptr) {
-  if (x > 0.0f) {
-    if (derivative != nullptr) *derivative = -1.0f;
-    return -x;
-  }
-  if (x > -width && bulge > 0.0f) {
-    const float s = -x / width;
-    if (derivative != nullptr)
-      *derivative = -bulge * 6.75f * (1.0f - s) * (1.0f - 3.0f * s) / width;
-    return bulge * 6.75f * s * (1.0f - s) * (1.0f - s);
-  }
-  if (derivative != nullptr) *derivative = 0.0f;
-  return 0.0f;
-}
 
 // The function Step 2 solves for vertex v at point p (a positive multiple of F(P) - T
 // near the solution), with the colliders and deepest penetrations of the last deformSkin

@@ -28,9 +28,16 @@ bool validDensity(const Density& density);
 float piecewiseDensity(const Density& density, float r, float* derivative);
 
 // Wyvill's polynomial in u = r^2, 1 - 22/9 u + 17/9 u^2 - 4/9 u^3, for u in [0, 1] (no clamp):
-// the one expression the profile's functions below share.
-inline float wyvillPolynomial(float u) {
+// the one place it is written; the profile's functions below and the packed lanes
+// (field_lanes.hpp, T a vector of floats, the same operations per lane) share it.
+template <typename T>
+inline T wyvillPolynomial(T u) {
   return 1.0f + u * (-22.0f / 9.0f + u * (17.0f / 9.0f - 4.0f / 9.0f * u));
+}
+// Its derivative in u, -22/9 + 34/9 u - 12/9 u^2 (no clamp).
+template <typename T>
+inline T wyvillDerivativeSquared(T u) {
+  return -22.0f / 9.0f + u * (34.0f / 9.0f - 12.0f / 9.0f * u);
 }
 
 // f(r) and f'(r) for r in [0, 1]; r outside is clamped (f = 1 below 0, 0 above 1, f' = 0).
@@ -64,7 +71,7 @@ inline float densityValueSquared(const Density& d, float u, float* derivative_u 
     return f;
   }
   if (derivative_u != nullptr) {
-    *derivative_u = -22.0f / 9.0f + u * (34.0f / 9.0f - 12.0f / 9.0f * u);
+    *derivative_u = wyvillDerivativeSquared(u);
   }
   return wyvillPolynomial(u);
 }

@@ -81,8 +81,8 @@ inline void fieldLanes(const FieldLanes& l, const glm::vec3& p, FieldValues& out
   const FieldVec s2 = s * s;
   const FieldVec u = (dx * dx + dy * dy + dz * dz) * s2;  // (distance / r_out)^2
   // Wyvill's profile in u (densityValueSquared): f = 1 and df/du = 0 at u <= 0, 0 beyond 1.
-  FieldVec fu = -22.0f / 9.0f + u * (34.0f / 9.0f - 12.0f / 9.0f * u);
-  FieldVec f = 1.0f + u * (-22.0f / 9.0f + u * (17.0f / 9.0f - 4.0f / 9.0f * u));
+  FieldVec fu = wyvillDerivativeSquared(u);
+  FieldVec f = wyvillPolynomial(u);
   const Mask centre = u <= zero;
   f = centre ? one : f;
   fu = centre ? zero : fu;

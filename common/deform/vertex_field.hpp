@@ -49,26 +49,61 @@ inline float diffField(float a, const glm::vec3& ga, float b, const glm::vec3& g
   return d;
 }
 
+// The side results of assembleDensity for Step 2 (vertex_solve.hpp): the vertex's own side
+// without the crease, F_p0 + F_p1 + F_bone (a limb vertex: F_p0 + F_bone), and its gradient.
+// DIFF's gradient is singular where the two limbs' fields are equal; the opposite limb's field
+// points out of that limb, not out of the vertex's skin.
+struct OwnSide {
+  float value = 0.0f;
+  glm::vec3 gradient{0.0f};
+};
+
+// D_v(P) of a limb or joint vertex (no w_v), the one place it is assembled: field(k, g) returns
+// F of the vertex's own primitive k at P (0: p0, the limb or the joint; 1, 2: a joint's two
+// limbs; 3: the bone) and, where g is not null, writes its gradient there. The gradient of D_v
+// goes to `gradient` and the own side to `own` where they are not null. The sums run in a
+// fixed order (p0, DIFF, bone), so every caller gets the same bits.
+template <typename Field>
+inline float assembleDensity(VertexClass cls, bool has_bone, int diff_exponent, Field&& field,
+                             glm::vec3* gradient, OwnSide* own = nullptr) {
+  const bool want = gradient != nullptr || own != nullptr;
+  glm::vec3 g0(0.0f);
+  float d = field(0, want ? &g0 : nullptr);
+  float side = d;
+  glm::vec3 smooth = g0;
+  if (cls == VertexClass::kJoint) {
+    glm::vec3 ga(0.0f), gb(0.0f), gd(0.0f);
+    const float fa = field(1, want ? &ga : nullptr);
+    const float fb = field(2, want ? &gb : nullptr);
+    d += diffField(fa, ga, fb, gb, diff_exponent, want ? &gd : nullptr);
+    g0 += gd;
+    smooth += ga;
+    side += fa;
+  }
+  if (has_bone) {
+    glm::vec3 gbone(0.0f);
+    const float fbone = field(3, want ? &gbone : nullptr);
+    d += fbone;
+    g0 += gbone;
+    smooth += gbone;
+    side += fbone;
+  }
+  if (gradient != nullptr) *gradient = g0;
+  if (own != nullptr) {
+    own->value = side;
+    own->gradient = smooth;
+  }
+  return d;
+}
+
 // D_v(P) of a limb or joint vertex from its primitives' posed copies (no w_v).
 inline float vertexDensity(VertexClass cls, const PosedPrimitive* p0, const PosedPrimitive* p1,
                            const PosedPrimitive* p2, const PosedPrimitive* bone, int diff_exponent,
                            const glm::vec3& p, glm::vec3* gradient) {
-  glm::vec3 g0(0.0f);
-  float d = primitiveField(*p0, p, gradient != nullptr ? &g0 : nullptr);
-  if (cls == VertexClass::kJoint) {
-    glm::vec3 ga(0.0f), gb(0.0f), gd(0.0f);
-    const float fa = primitiveField(*p1, p, gradient != nullptr ? &ga : nullptr);
-    const float fb = primitiveField(*p2, p, gradient != nullptr ? &gb : nullptr);
-    d += diffField(fa, ga, fb, gb, diff_exponent, gradient != nullptr ? &gd : nullptr);
-    g0 += gd;
-  }
-  if (bone != nullptr) {
-    glm::vec3 gbone(0.0f);
-    d += primitiveField(*bone, p, gradient != nullptr ? &gbone : nullptr);
-    g0 += gbone;
-  }
-  if (gradient != nullptr) *gradient = g0;
-  return d;
+  const PosedPrimitive* const own[4] = {p0, p1, p2, bone};
+  return assembleDensity(
+      cls, bone != nullptr, diff_exponent,
+      [&own, &p](int k, glm::vec3* g) { return primitiveField(*own[k], p, g); }, gradient);
 }
 
 // Convenience for calibration and tests: D_v of vertex v of a model, primitives posed.
