@@ -97,7 +97,14 @@ void passContacts(DeformFrame& fr) {
         const glm::dvec3 cr = glm::cross(pb - pa, pc - pa);
         const double twice_area = glm::length(cr);
         if (!(twice_area > 0.0)) continue;
-        const double area = 0.5 * twice_area;
+        // The skin in contact is the skin that was there: a face stretched by projecting its
+        // vertices along diverging normals (a nose tip deep in a ball) counts with its
+        // skinned area, so area and force stay bounded at any depth.
+        const glm::dvec3 ra(fr.in->rigid_positions[a]);
+        const double rigid_twice_area =
+            glm::length(glm::cross(glm::dvec3(fr.in->rigid_positions[b]) - ra,
+                                   glm::dvec3(fr.in->rigid_positions[c]) - ra));
+        const double area = 0.5 * std::min(twice_area, rigid_twice_area);
         const double p_mean =
             (static_cast<double>(st.pressure[a]) + st.pressure[b] + st.pressure[c]) / 3.0;
         bc.force -= (p_mean * area / twice_area) * cr;

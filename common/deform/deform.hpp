@@ -177,7 +177,9 @@ struct DeformCounters {
 struct BodyContact {
   int partner = -1;        // body index in the scene (may be this body: self-contact)
   glm::dvec3 force{0.0};   // N on this body: sum over contact faces of -p * area * n
-  double area = 0.0;       // m^2 of faces whose three vertices lie on the contact
+  double area = 0.0;       // m^2 of faces whose three vertices lie on the contact (each
+                           // at most its skinned area: stretched faces count as the skin
+                           // that was there)
   glm::dvec3 centre{0.0};  // area-weighted centroid of those faces (world)
   double max_depth = 0.0;  // deepest rigid-pose penetration of a vertex (m)
   int vertices = 0;        // contact vertices
