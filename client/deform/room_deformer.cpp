@@ -116,6 +116,14 @@ RoomDeformer::~RoomDeformer() {
 }
 
 Status RoomDeformer::rebuild(std::span<const MemberView> views, RoomView& view) {
+  // What the bodies that stay carry over (elastic memory: dents shared across rebuilds).
+  std::vector<std::pair<Key, DeformState>> carried;
+  if (shared_->scene) {
+    for (std::size_t i = 0; i < keys_.size(); ++i) {
+      if (const DeformState* st = shared_->scene->deformState(static_cast<int>(i)))
+        carried.emplace_back(keys_[i], *st);
+    }
+  }
   for (const Key& k : keys_) view.setDeformer(k.id, nullptr);
   keys_.clear();
   hooks_.clear();
@@ -160,6 +168,11 @@ Status RoomDeformer::rebuild(std::span<const MemberView> views, RoomView& view) 
   tiers_.assign(nbody, DeformTier::kFull);
   previous_tiers_.reserve(nbody);
   keys_ = wanted_;
+  for (const auto& [key, state] : carried) {
+    const auto found = std::find(keys_.begin(), keys_.end(), key);
+    if (found != keys_.end())
+      shared_->scene->carryState(static_cast<int>(found - keys_.begin()), state);
+  }
   for (std::size_t i = 0; i < keys_.size(); ++i) {
     hooks_.push_back(std::make_shared<Hook>(shared_, static_cast<int>(i)));
     view.setDeformer(keys_[i].id, hooks_.back());

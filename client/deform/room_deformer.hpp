@@ -66,9 +66,11 @@ class RoomDeformer {
   RoomDeformer(const RoomDeformer&) = delete;
   RoomDeformer& operator=(const RoomDeformer&) = delete;
 
-  // Before view.render(views): takes this frame's bodies, postures and placements. A
-  // rebuild that fails (an avatar that does not validate) leaves every body rigid until
-  // the set of bodies changes again, and is returned.
+  // Before view.render(views): takes this frame's bodies, postures and placements. When the
+  // set of bodies changed the scene is rebuilt, and every body that stays (same view id and
+  // avatar) carries its warm starts and elastic memory (dents) over. A rebuild that fails (an
+  // avatar that does not validate) leaves every body rigid until the set of bodies changes again,
+  // and is returned.
   Status sync(std::span<const MemberView> views, RoomView& view);
   // After sync: poses the bodies and runs Step 1. time: seconds (viscoelastic recovery).
   // `received`: a Step 1 list in this scene's body indices (see bodyOf); when it fails

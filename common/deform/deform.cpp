@@ -213,6 +213,19 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
   st.counters.phase_seconds = times;
 }
 
+bool carryDeformState(const DeformState& from, DeformState& to) {
+  if (from.offset.size() != to.offset.size() || from.memory.size() != to.memory.size() ||
+      from.free_offset.size() != to.free_offset.size()) {
+    return false;
+  }
+  to.offset = from.offset;
+  to.free_offset = from.free_offset;
+  to.memory = from.memory;
+  to.time = from.time;
+  to.started = from.started;
+  return true;
+}
+
 float vertexFunction(const ImplicitModel& model, std::span<const BodyView> bodies, int self,
                      const DeformInput& input, const DeformState& state,
                      const DeformOptions& options, int v, const glm::vec3& p, glm::vec3* gradient) {

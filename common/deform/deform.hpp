@@ -235,6 +235,12 @@ struct DeformState {
 Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t> indices,
                        DeformState& state);
 
+// What a body carries from frame to frame, copied into the state of the same body in a
+// rebuilt scene (a member joined or left, a ball spawned): the warm starts (offset,
+// free_offset), the elastic memory (dents of plastic and viscoelastic parts) and the time
+// of the last frame. Returns false, changing nothing, when the vertex counts differ.
+bool carryDeformState(const DeformState& from, DeformState& to);
+
 // Steps 2 and 3 for body `self` of the scene `bodies` (its posed primitives must be
 // bodies[self].posed), given Step 1's interaction list over the same bodies. Writes
 // state.positions, normals, flags, counters, contacts; updates warm starts and memory.

@@ -399,6 +399,10 @@ const DeformState* DeformScene::deformState(int index) const {
   const SceneSlot& b = impl_->bodies[static_cast<std::size_t>(index)];
   return b.deforms ? &b.state : nullptr;
 }
+bool DeformScene::carryState(int index, const DeformState& from) {
+  SceneSlot& b = impl_->bodies[static_cast<std::size_t>(index)];
+  return b.deforms && carryDeformState(from, b.state);
+}
 const SkinningRig& DeformScene::skinningRig(int index) const {
   return impl_->bodies[static_cast<std::size_t>(index)].rig;
 }

@@ -169,6 +169,9 @@ class DeformScene {
   // The body's deform state (counters, flags, per-partner contacts), or null when it does
   // not deform.
   const DeformState* deformState(int index) const;
+  // Carries a body's state over from a scene this one replaces (see carryDeformState):
+  // false when the body does not deform or the state is another mesh's.
+  bool carryState(int index, const DeformState& from);
   // The body's rigid component as create() built it for options.skinning: the method that
   // runs (rig.method) and why it differs from the requested one (rig.warning, e.g. a ball
   // or a skeleton without a spine under kSpineFfd).
