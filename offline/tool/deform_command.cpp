@@ -132,11 +132,15 @@ Result<std::pair<int, int>> parseFrames(const std::string& text, int frame_count
   return std::make_pair(static_cast<int>(a), static_cast<int>(b));
 }
 
-// The body's row of the forces CSV: frame, time, body, area, force, |force|, partner.
+// The body's row of the forces CSV: frame, time, body, area, force, |force|, partner, and
+// the force the ball's dynamics put on it over the step from this frame (|N|; empty without
+// --ball-physics).
 void csvRow(std::string& csv, int frame, double time, const std::string& body,
-            const BodyContactSummary& s, const std::string& partner) {
-  csv += fmt::format("{},{:.6f},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{}\n", frame, time, body,
-                     s.area, s.force.x, s.force.y, s.force.z, glm::length(s.force), partner);
+            const BodyContactSummary& s, const std::string& partner,
+            const std::optional<double>& dynamics) {
+  csv += fmt::format("{},{:.6f},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{},{}\n", frame, time, body,
+                     s.area, s.force.x, s.force.y, s.force.z, glm::length(s.force), partner,
+                     dynamics ? fmt::format("{:.9g}", *dynamics) : std::string());
 }
 
 std::string csvName(std::string name) {
@@ -299,7 +303,8 @@ Status runDeform(const DeformCommandOptions& opt) {
 
   // Frame by frame.
   std::string csv =
-      "frame,time_s,body,contact_area_m2,force_x_n,force_y_n,force_z_n,force_n,partner\n";
+      "frame,time_s,body,contact_area_m2,force_x_n,force_y_n,force_z_n,force_n,partner,"
+      "dynamics_force_n\n";
   SceneTimings total;
   double step_ms = 0.0;
   std::int64_t iterations = 0, iterating = 0, unsolved = 0, held = 0, smoothed = 0;
@@ -330,6 +335,20 @@ Status runDeform(const DeformCommandOptions& opt) {
     total.step1_ms += t.step1_ms;
     total.deform_ms += t.deform_ms;
 
+    // The ball's next position under its dynamics (gravity, floor, the avatar's primitives),
+    // from the configuration of this frame: the forces they put on each body.
+    std::vector<glm::vec3> dynamics_on(static_cast<std::size_t>(nbody), glm::vec3(0.0f));
+    if (ball_args && opt.ball_physics) {
+      const BallStepReport report =
+          stepBall(ball_state, scene.bodyViews(), static_cast<float>(gltf.frame_time), ball_step);
+      for (int c = 0; c < report.contact_count; ++c) {
+        const BallContact& bc = report.contacts[static_cast<std::size_t>(c)];
+        if (bc.body < 0 || bc.body >= nbody) continue;               // the floor
+        dynamics_on[static_cast<std::size_t>(bc.body)] -= bc.force;  // reaction on the body
+        dynamics_on[1] += bc.force;                                  // on the ball
+      }
+    }
+
     // The frame's vertices (world = the avatar's model space).
     GltfFrame& out = gltf.frames.emplace_back();
     out.positions.resize(total_vertices);
@@ -351,7 +370,10 @@ Status runDeform(const DeformCommandOptions& opt) {
       } else if (s.self_area > 0.0) {
         partner = "self";
       }
-      csvRow(csv, frame, time, scene.body(i).name, s, partner);
+      std::optional<double> dynamics;
+      if (ball_args && opt.ball_physics)
+        dynamics = glm::length(dynamics_on[static_cast<std::size_t>(i)]);
+      csvRow(csv, frame, time, scene.body(i).name, s, partner, dynamics);
       contact = contact || s.area > 0.0;
       max_force = std::max(max_force, glm::length(s.force));
       max_area = std::max(max_area, s.area);
@@ -364,11 +386,6 @@ Status runDeform(const DeformCommandOptions& opt) {
       }
     }
     if (contact) ++contact_frames;
-
-    // The ball's next position under its dynamics (gravity, floor, the avatar's primitives).
-    if (ball_args && opt.ball_physics) {
-      stepBall(ball_state, scene.bodyViews(), static_cast<float>(gltf.frame_time), ball_step);
-    }
   }
   gltf.mesh.positions = gltf.frames.front().positions;
   gltf.mesh.normals = gltf.frames.front().normals;

@@ -100,6 +100,7 @@ struct CsvRow {
   glm::dvec3 force{0.0};
   double magnitude = 0.0;
   std::string partner;
+  std::string dynamics;  // the ball dynamics' force (N), empty without --ball-physics
 };
 
 std::vector<CsvRow> readCsv(const std::string& path, std::string& header) {
@@ -113,8 +114,8 @@ std::vector<CsvRow> readCsv(const std::string& path, std::string& header) {
     std::string item;
     while (std::getline(s, item, ',')) f.push_back(item);
     if (!line.empty() && line.back() == ',') f.emplace_back();
-    EXPECT_EQ(f.size(), 9u) << line;
-    if (f.size() != 9) continue;
+    EXPECT_EQ(f.size(), 10u) << line;
+    if (f.size() != 10) continue;
     CsvRow r;
     r.frame = std::stoi(f[0]);
     r.time = std::stod(f[1]);
@@ -123,6 +124,7 @@ std::vector<CsvRow> readCsv(const std::string& path, std::string& header) {
     r.force = glm::dvec3(std::stod(f[4]), std::stod(f[5]), std::stod(f[6]));
     r.magnitude = std::stod(f[7]);
     r.partner = f[8];
+    r.dynamics = f[9];
     rows.push_back(r);
   }
   return rows;
@@ -200,7 +202,8 @@ TEST(DeformCli, DeformClipFramesWithABall) {
   std::string header;
   const std::vector<CsvRow> rows = readCsv(dir + "/forces.csv", header);
   EXPECT_EQ(header,
-            "frame,time_s,body,contact_area_m2,force_x_n,force_y_n,force_z_n,force_n,partner");
+            "frame,time_s,body,contact_area_m2,force_x_n,force_y_n,force_z_n,force_n,partner,"
+            "dynamics_force_n");
   ASSERT_EQ(rows.size(), 12u);
   int contact_frames = 0;
   std::size_t contact_index = 0;
@@ -212,6 +215,7 @@ TEST(DeformCli, DeformClipFramesWithABall) {
     EXPECT_NEAR(body.time, body.frame / 120.0, 1e-5);
     EXPECT_EQ(body.body, "makehuman_game_engine");
     EXPECT_EQ(ball.body, "ball");
+    EXPECT_EQ(body.dynamics, "") << "no ball dynamics without --ball-physics";
     const double scale = std::max(1.0, body.magnitude);
     EXPECT_NEAR(body.force.x + ball.force.x, 0.0, 1e-6 * scale);
     EXPECT_NEAR(body.force.y + ball.force.y, 0.0, 1e-6 * scale);
