@@ -202,6 +202,7 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
   relaxJointVertices(fr, pool);
   clock.lap(times.relax);
   const int smoothed = opt.smooth_passes > 0 ? smoothCorrections(fr) : 0;
+  boundRelaxedMoves(fr);
   clock.lap(times.smooth);
   skinNormals(fr, pool);  // Step 3
   clock.lap(times.normals);

@@ -352,25 +352,6 @@ inline float writeSolved(const DeformFrame& fr, int v, const glm::vec3& p0, cons
   return s_out;
 }
 
-// How far vertex v may end from its skinned position (DeformOptions::move_margin): its drift
-// from where each of its own primitives' bones alone would carry its rest position (its
-// own field, calibrated at rest, moves with those bones, so it can ask for no more), its
-// rigid-pose penetration and the bulge this frame allows, plus the margin. Infinite when
-// moves are not bounded.
-float moveAllowance(const DeformFrame& fr, std::size_t vi) {
-  const DeformOptions& opt = *fr.opt;
-  if (opt.move_margin < 0.0f || fr.in->rest_positions.empty()) return INFINITY;
-  const glm::vec4 rest(fr.in->rest_positions[vi], 1.0f);
-  const glm::vec3 p = fr.in->rigid_positions[vi];
-  float drift = 0.0f;
-  for (const std::int16_t prim : fr.model->calibration.prims[vi]) {
-    if (prim < 0) continue;
-    const glm::vec3 carried(fr.sc->prim_to_world[static_cast<std::size_t>(prim)] * rest);
-    drift = std::max(drift, glm::length(p - carried));
-  }
-  return drift + fr.st->depth[vi] + fr.sc->bulge_allowance + opt.move_margin;
-}
-
 }  // namespace
 
 // Pass B's short way for the commonest solved vertex, the lone limb vertex: a limb vertex of
@@ -450,7 +431,7 @@ bool solveLoneLimb(const DeformFrame& fr, int v, const LoneStart& start, DeformC
   if (steps > 0) ++cnt.iterating_vertices;
   std::uint8_t flags = 0;
   float s_sol = 0.0f;
-  if (res.found && std::abs(res.s) > moveAllowance(fr, vi)) {
+  if (res.found && std::abs(res.s) > moveAllowance(fr, vi, false)) {
     flags |= kVertexHeld;  // a root beyond what its own field can ask: see moveAllowance
     ++cnt.held_vertices;
   } else if (res.found) {
@@ -642,7 +623,9 @@ void passSolve(DeformFrame& fr, int first, int last, DeformCounters& cnt) {
     // A root beyond what the vertex's own field and its contact can ask (see moveAllowance):
     // a vertex that resolves no penetration stays rigid; one that does goes that far.
     if (res.found && !held) {
-      const float limit = moveAllowance(fr, vi);
+      const bool bulging = std::any_of(vp.cand, vp.cand + vp.ncand,
+                                       [](const Candidate& c) { return c.bulge > 0.0f; });
+      const float limit = moveAllowance(fr, vi, bulging);
       if (std::abs(res.s) > limit) {
         if (st.depth[vi] > 0.0f) {
           res.s = std::copysign(limit, res.s);
@@ -717,6 +700,45 @@ void passSolve(DeformFrame& fr, int first, int last, DeformCounters& cnt) {
       ++cnt.relaxed_vertices;
       sc.field_gradient[vi] = gradientNear(vp, st.positions[vi], opt.root.final_step);
     }
+  }
+}
+
+// How far vertex v may end from its skinned position (DeformOptions::move_margin): its drift
+// from where each of its own primitives' bones alone would carry its rest position (its
+// own field, calibrated at rest, moves with those bones, so it can ask for no more), its
+// rigid-pose penetration, plus the margin; and the bulge this frame allows where a partner
+// near it bulges it (`bulging`) or it penetrates one (the common surface, split in field
+// units, may lie beyond the first-order depth). Infinite when moves are not bounded.
+float moveAllowance(const DeformFrame& fr, std::size_t vi, bool bulging) {
+  const DeformOptions& opt = *fr.opt;
+  if (opt.move_margin < 0.0f || fr.in->rest_positions.empty()) return INFINITY;
+  const glm::vec4 rest(fr.in->rest_positions[vi], 1.0f);
+  const glm::vec3 p = fr.in->rigid_positions[vi];
+  float drift = 0.0f;
+  for (const std::int16_t prim : fr.model->calibration.prims[vi]) {
+    if (prim < 0) continue;
+    const glm::vec3 carried(fr.sc->prim_to_world[static_cast<std::size_t>(prim)] * rest);
+    drift = std::max(drift, glm::length(p - carried));
+  }
+  const float depth = fr.st->depth[vi];
+  const bool slack = bulging || depth > 0.0f;
+  return drift + depth + (slack ? fr.sc->bulge_allowance : 0.0f) + opt.move_margin;
+}
+
+// The move bound once more after relaxation and smoothing, which move vertices the solve
+// bounded: a vertex they carried beyond its allowance is pulled back along its correction.
+void boundRelaxedMoves(DeformFrame& fr) {
+  DeformState& st = *fr.st;
+  if (fr.opt->move_margin < 0.0f || fr.in->rest_positions.empty()) return;
+  const bool bulging =
+      fr.opt->self_propagation || std::any_of(fr.sc->colliders.begin(), fr.sc->colliders.end(),
+                                              [&](const auto& c) { return c.body != fr.self; });
+  for (std::size_t v = 0; v < static_cast<std::size_t>(fr.nvert); ++v) {
+    if ((st.flags[v] & (kVertexRelaxed | kVertexSmoothed)) == 0) continue;
+    const glm::vec3 c = st.positions[v] - fr.in->rigid_positions[v];
+    const float len = glm::length(c);
+    const float limit = moveAllowance(fr, v, bulging);
+    if (len > limit) st.positions[v] = fr.in->rigid_positions[v] + c * (limit / len);
   }
 }
 

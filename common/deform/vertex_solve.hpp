@@ -231,6 +231,14 @@ RootResult solveVertex(VertexProblem& vp, glm::vec3& dir, float s_start, float g
 // relaxed vertices (from `first` on) with the relaxed ones' problems.
 void passSolve(DeformFrame& fr, int first, int last, DeformCounters& cnt);
 
+// The move bound (DeformOptions::move_margin): how far vertex vi may end from its skinned
+// position (infinite when moves are not bounded); `bulging`: a partner near it bulges it.
+float moveAllowance(const DeformFrame& fr, std::size_t vi, bool bulging);
+
+// The move bound applied once more after relaxation and smoothing (which move vertices the
+// solve bounded). O(nvert) flag tests.
+void boundRelaxedMoves(DeformFrame& fr);
+
 // Whether vertex vi is a lone limb vertex: a limb vertex of one primitive (no bone), not fixed
 // (the part of the short way's test that never changes; init time).
 bool loneKind(const Calibration& cal, std::size_t vi, bool fixed);
