@@ -57,6 +57,9 @@ struct DeformCommandOptions {
   std::string forces_csv;
   std::string primitives = "config/avatars/humanoid.toml";
   std::string config = "config";
+  double max_mib = 256.0;  // refuse an estimated output beyond this (MiB) unless allow_large
+  bool allow_large = false;
+  bool quiet = false;  // no progress lines
 };
 
 struct BallArgs {
@@ -299,6 +302,22 @@ Status runDeform(const DeformCommandOptions& opt) {
     vertex_offset[static_cast<std::size_t>(i) + 1] = offset + skin.positions.size();
   }
   const std::size_t total_vertices = vertex_offset.back();
+  // The file holds a morph target (positions and normals, float32) per frame beside the
+  // mesh: estimate it before spending the time, and refuse what nobody can open.
+  const double estimate_mib =
+      (static_cast<double>(frame_count + 1) * static_cast<double>(total_vertices) * 24.0 +
+       static_cast<double>(gltf.mesh.indices.size()) * 4.0) /
+      (1024.0 * 1024.0);
+  if (estimate_mib > opt.max_mib && !opt.allow_large) {
+    return fail(
+        "{}: about {:.0f} MiB for {} frames of {} vertices, over --max-size {:.0f} MiB (fewer "
+        "frames with --frames A:B or --every N, or --allow-large to write it anyway)",
+        opt.out, estimate_mib, frame_count, total_vertices, opt.max_mib);
+  }
+  if (!opt.quiet) {
+    fmt::print(stderr, "vistel-avatar deform: {} frames of {} vertices, about {:.1f} MiB\n",
+               frame_count, total_vertices, estimate_mib);
+  }
   gltf.frames.reserve(static_cast<std::size_t>(frame_count));
 
   // Frame by frame.
@@ -311,7 +330,14 @@ Status runDeform(const DeformCommandOptions& opt) {
   int contact_frames = 0;
   double max_force = 0.0, max_area = 0.0;
   const double t0 = first * frame_time;
+  auto last_progress = std::chrono::steady_clock::now();
   for (int k = 0; k < frame_count; ++k) {
+    if (!opt.quiet && k > 0 &&
+        std::chrono::steady_clock::now() - last_progress > std::chrono::seconds(2)) {
+      last_progress = std::chrono::steady_clock::now();
+      fmt::print(stderr, "vistel-avatar deform: frame {} of {} ({:.0f}%)\n", k, frame_count,
+                 100.0 * k / frame_count);
+    }
     const int frame = first + k * opt.every;
     const double time = frame * frame_time;
     if (retargeter) {
@@ -487,6 +513,13 @@ void registerDeformCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--config", opt->config, "config folder with skeletons/*.toml joint maps")
       ->capture_default_str();
+  cmd->add_option("--max-size", opt->max_mib,
+                  "refuse when the output would exceed this many MiB (estimated before any "
+                  "frame is computed)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_flag("--allow-large", opt->allow_large, "write the file whatever its size");
+  cmd->add_flag("--quiet", opt->quiet, "no size estimate or progress lines on stderr");
   rest->excludes(bvh);
   setCommandAction(cmd, [opt]() { return runDeform(*opt); });
 }

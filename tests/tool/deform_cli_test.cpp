@@ -316,3 +316,26 @@ TEST(DeformCli, BadArgumentsFailCleanly) {
 
 }  // namespace
 }  // namespace vistel
+
+namespace vistel {
+namespace {
+
+// A per-frame export is estimated before any frame is computed: beyond --max-size it is
+// refused with the estimate and the ways out; --allow-large writes it anyway.
+TEST(DeformCli, AnOversizedExportIsRefusedBeforeItIsComputed) {
+  const std::string dir = test::scratchDir();
+  const std::string a = defaultAvatar() + " --rest --frames 0:40";
+  test::ToolRun run = test::runTool("deform " + a + " --max-size 1 --out " + dir + "/big.glb", dir);
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.err.find("over --max-size 1 MiB"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("--every N"), std::string::npos) << run.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/big.glb"));
+  run = test::runTool("deform " + a + " --max-size 1 --allow-large --out " + dir + "/big.glb", dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("40 frames of"), std::string::npos) << run.err;
+  const double mib = static_cast<double>(std::filesystem::file_size(dir + "/big.glb")) / 1048576.0;
+  EXPECT_GT(mib, 1.0);
+}
+
+}  // namespace
+}  // namespace vistel
