@@ -7,10 +7,16 @@
 
 #include <CLI/CLI.hpp>
 
+#include "common/wire/packets.hpp"
 #include "offline/tool/tool_commands.hpp"
+#include "vistel_version.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"vistel-avatar: inspect, pose, build and export vistel avatars"};
+  // Avatars travel to the server and peers: the version names the datagram wire it matches.
+  app.set_version_flag("--version", "vistel-avatar " + std::string(vistel::kVistelVersion) +
+                                        " (datagram wire " +
+                                        std::to_string(vistel::wire::kWireVersion) + ")");
   app.require_subcommand(1);
   vistel::registerInfoCommand(app);
   vistel::registerPoseCommand(app);

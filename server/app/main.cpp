@@ -1,6 +1,7 @@
 // vistel-server: the session server (DESIGN.md §6).
 //   vistel-server [--port 7400] [--config config/server.toml] [--bind ADDRESS]
 //                 [--log-level LEVEL] [--stats-json FILE] [--metrics-port P] [--agones]
+//   vistel-server --version   (the project version and the protocol versions it speaks)
 // Prints "vistel-server listening on ADDRESS:PORT" on stdout once both sockets are
 // bound (port 0 picks a free one), logs to stderr, and shuts down cleanly on SIGINT or
 // SIGTERM (every client is told, sockets close, exit status 0). --stats-json writes the
@@ -19,12 +20,14 @@
 #include <CLI/CLI.hpp>
 
 #include "common/base/file.hpp"
+#include "common/wire/packets.hpp"
 #include "server/core/server_config.hpp"
 #include "server/http/agones_sdk.hpp"
 #include "server/http/http_endpoint.hpp"
 #include "server/http/prometheus.hpp"
 #include "server/shell/asio.hpp"
 #include "server/shell/server_shell.hpp"
+#include "vistel_version.hpp"
 
 int main(int argc, char** argv) {
   using namespace vistel;
@@ -51,6 +54,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 65535));
   app.add_flag("--agones", agones,
                "report to the Agones SDK sidecar at localhost:$AGONES_SDK_HTTP_PORT");
+  app.set_version_flag("--version",
+                       versionLine("vistel-server", kProtocolVersion, wire::kWireVersion));
   CLI11_PARSE(app, argc, argv);
 
   spdlog::set_default_logger(spdlog::stderr_color_mt("vistel-server"));

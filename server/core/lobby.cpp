@@ -230,6 +230,39 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
     return;
   }
 
+  // A resumed session (Join.resume_*): the stale member it replaces leaves first, so the
+  // name and (when free) the seat pass to the new one. Only the holder of that member's id
+  // and key can do this: a name alone evicts nobody.
+  int preferred_seat = -1;
+  // The evicted member's reference to the avatar would free a file the new member needs:
+  // held for the rest of this function (the new member takes its own).
+  struct AvatarHold {
+    AvatarStore* store = nullptr;
+    std::string hash;
+    ~AvatarHold() {
+      if (store != nullptr) store->release(hash);
+    }
+  } hold;
+  if (join.resume_member_id() != 0) {
+    auto it = room_by_name_.find(join.room());
+    Member* stale =
+        member_ids_.live(join.resume_member_id()) ? findMember(join.resume_member_id()) : nullptr;
+    if (stale != nullptr && it != room_by_name_.end() && stale->room.value == it->second &&
+        stale->name == join.name() && stale->key == join.resume_key() && stale->conn != conn) {
+      preferred_seat = stale->seat;
+      if (stored != nullptr) {
+        store_.addRef(join.avatar_hash());
+        hold.store = &store_;
+        hold.hash = join.avatar_hash();
+      }
+      spdlog::info("lobby: '{}' (member {:#x}) resumes on connection {}: the stale member goes",
+                   stale->name, stale->id.value, conn);
+      reject(stale->conn, control::ErrorReply::TIMEOUT,
+             "replaced by a resumed session of the same member", now, fx, "resumed elsewhere");
+      stored = store_.find(join.avatar_hash());
+    }
+  }
+
   // Find or create the room; check capacity and the name.
   RoomRecord* room = nullptr;
   if (auto it = room_by_name_.find(join.room()); it != room_by_name_.end()) {
@@ -264,6 +297,7 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
            now, fx, "upload capacity", 1.0f);
     return;
   }
+  if (room == nullptr && !mayCreateRoom(conn, c, now, fx)) return;
   if (room == nullptr) {
     const std::uint32_t rid = room_ids_.allocate();
     if (rid == 0) {
@@ -276,6 +310,7 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
     r.name = join.room();
     r.seat_taken.assign(static_cast<std::size_t>(config_.max_members_per_room), false);
     room_by_name_[r.name] = rid;
+    roomOpened(r, c);
     RoomCommand cmd;
     cmd.kind = RoomCommand::Kind::kCreate;
     cmd.room = r.id;
@@ -303,7 +338,11 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
   m.avatar_hash = join.avatar_hash();
   m.avatar_size = join.avatar_size();
   m.key = newKey();
-  const auto free_seat = std::find(room->seat_taken.begin(), room->seat_taken.end(), false);
+  auto free_seat = std::find(room->seat_taken.begin(), room->seat_taken.end(), false);
+  if (preferred_seat >= 0 && static_cast<std::size_t>(preferred_seat) < room->seat_taken.size() &&
+      !room->seat_taken[static_cast<std::size_t>(preferred_seat)]) {
+    free_seat = room->seat_taken.begin() + preferred_seat;  // a resumed member keeps its seat
+  }
   m.seat = static_cast<int>(free_seat - room->seat_taken.begin());
   *free_seat = true;
   if (stored != nullptr) {
@@ -452,6 +491,9 @@ void Lobby::beginUpload(ConnId conn, Connection& c, const std::string& hash, std
   c.upload_reserved = size;
   c.upload_hash = hash;
   c.upload_progress_at = now;
+  c.upload_started_at = now;
+  c.upload_window_at = now;
+  c.upload_window_bytes = 0;
   c.upload.clear();
   upload_bytes_in_flight_ += size;
   uploader_of_[hash] = conn;
@@ -655,27 +697,103 @@ void Lobby::update(double now, Effects& fx) {
     for (auto& [conn, c] : connections_) {
       c.opened_at += pause;
       c.upload_progress_at += pause;
+      c.upload_started_at += pause;
+      c.upload_window_at += pause;
     }
   }
   last_update_ = now;
   std::vector<ConnId> late;
-  std::vector<ConnId> stalled;
   for (const auto& [conn, c] : connections_) {
     if (c.member.value == 0 && now - c.opened_at > config_.join_timeout_s) late.push_back(conn);
-    if (c.upload_reserved > 0 && now - c.upload_progress_at > config_.upload_stall_timeout_s) {
-      stalled.push_back(conn);
-    }
   }
   for (ConnId conn : late) {
     reject(conn, control::ErrorReply::TIMEOUT,
            fmt::format("no Join within {:.0f} s", config_.join_timeout_s), now, fx);
   }
-  for (ConnId conn : stalled) {
-    reject(conn, control::ErrorReply::TIMEOUT,
-           fmt::format("avatar upload stalled (no chunk for {:.0f} s)",
-                       config_.upload_stall_timeout_s),
-           now, fx, "upload stalled", 1.0f);
+  checkUploads(now, fx);
+}
+
+Lobby::UploadProblem Lobby::uploadProblem(const Connection& c, double now) const {
+  if (now - c.upload_progress_at > config_.upload_stall_timeout_s) {
+    return {"upload stalled", fmt::format("avatar upload stalled (no chunk for {:.0f} s)",
+                                          config_.upload_stall_timeout_s)};
   }
+  const double deadline =
+      config_.upload_deadline_base_s +
+      static_cast<double>(c.upload_reserved) / config_.upload_deadline_rate_bytes_per_s;
+  if (now - c.upload_started_at > deadline) {
+    return {"upload deadline",
+            fmt::format("avatar upload unfinished at its deadline ({} of {} bytes after {:.0f} s); "
+                        "aborted",
+                        c.upload.size(), c.upload_reserved, deadline)};
+  }
+  // The rate floor, over whole windows after the grace: the window must have carried the
+  // floor's worth, or the rest of the file when that is less.
+  const double window = now - c.upload_window_at;
+  if (config_.upload_min_rate_bytes_per_s > 0.0 &&
+      now - c.upload_started_at >= config_.upload_grace_s + config_.upload_rate_window_s &&
+      window >= config_.upload_rate_window_s) {
+    const std::uint64_t moved = c.upload.size() - c.upload_window_bytes;
+    const std::uint64_t left = c.upload_reserved - c.upload_window_bytes;
+    const double wanted = std::min(static_cast<double>(left), config_.upload_min_rate_bytes_per_s *
+                                                                  config_.upload_rate_window_s);
+    if (static_cast<double>(moved) < wanted) {
+      return {"upload too slow",
+              fmt::format("avatar upload too slow ({:.0f} bytes/s over the last {:.1f} s; the "
+                          "floor is {:.0f} bytes/s); aborted",
+                          static_cast<double>(moved) / window, window,
+                          config_.upload_min_rate_bytes_per_s)};
+    }
+  }
+  return {};
+}
+
+void Lobby::checkUploads(double now, Effects& fx) {
+  // Find the uploads to abort (rejecting may hand an upload to another connection).
+  std::vector<std::pair<ConnId, UploadProblem>> aborted;
+  for (auto& [conn, c] : connections_) {
+    if (c.upload_reserved == 0) continue;
+    UploadProblem problem = uploadProblem(c, now);
+    if (!problem.reason.empty()) {
+      aborted.emplace_back(conn, std::move(problem));
+    } else if (now - c.upload_window_at >= config_.upload_rate_window_s) {
+      c.upload_window_at = now;  // a new rate window
+      c.upload_window_bytes = c.upload.size();
+    }
+  }
+  // Abort them: the ErrorReply says why; the slot goes to a waiting member or a newcomer.
+  for (auto& [conn, problem] : aborted) {
+    reject(conn, control::ErrorReply::TIMEOUT, problem.message, now, fx, problem.reason, 1.0f);
+  }
+}
+
+void Lobby::setConnectionAddress(ConnId conn, std::string address) {
+  auto it = connections_.find(conn);
+  if (it != connections_.end()) it->second.address = std::move(address);
+}
+
+bool Lobby::mayCreateRoom(ConnId conn, const Connection& c, double now, Effects& fx) {
+  if (config_.max_rooms_per_address <= 0 || c.address.empty()) return true;
+  auto it = rooms_by_address_.find(c.address);
+  const int open = it == rooms_by_address_.end() ? 0 : it->second;
+  if (open < config_.max_rooms_per_address) return true;
+  reject(conn, control::ErrorReply::SERVER_FULL,
+         fmt::format("{} rooms created from {} are open already (the limit per address)", open,
+                     c.address),
+         now, fx, "rooms per address", 5.0f);
+  return false;
+}
+
+void Lobby::roomOpened(RoomRecord& room, const Connection& c) {
+  if (c.address.empty()) return;
+  room.creator_address = c.address;
+  ++rooms_by_address_[c.address];
+}
+
+void Lobby::roomClosed(const RoomRecord& room) {
+  if (room.creator_address.empty()) return;
+  auto it = rooms_by_address_.find(room.creator_address);
+  if (it != rooms_by_address_.end() && --it->second <= 0) rooms_by_address_.erase(it);
 }
 
 void Lobby::shutdown(double now, Effects& fx) {
@@ -749,6 +867,7 @@ void Lobby::removeMember(MemberId id, std::string_view reason, Effects& fx) {
     for (const PropRecord& p : room.props) prop_ids_.release(p.id.value);
     const std::uint32_t rid = room.id.value;
     room_by_name_.erase(room.name);
+    roomClosed(room);
     room_ids_.release(rid);
     rooms_.erase(rid);
   } else {

@@ -8,6 +8,13 @@
 // connection is closed (logged with the reason); a bad hello is dropped (counted,
 // logged) and never answered. A hello is answered with fewer bytes than it carried.
 //
+// Resuming: a Join carrying the id and UDP key of a live member with the same room and
+// name (Join.resume_member_id/resume_key, a client reconnecting before the server noticed
+// its old connection died) replaces that member: the stale one is closed (TIMEOUT,
+// "replaced by a resumed session") and the new one takes its seat when free. Without the
+// matching key a taken name is refused NAME_TAKEN as before. A UDP address change of a
+// member (NAT rebinding) is handled by onHello's challenge.
+//
 // Concurrent joins with one avatar the server lacks share one upload: the first joiner
 // uploads, the others wait (Welcome.avatar_pending) and become ready with it; should the
 // upload fail, a waiting member takes it over (UploadAvatar).
@@ -19,8 +26,12 @@
 // RATE_LIMITED. Upload memory: a join whose avatar must be uploaded reserves its offered
 // size against max_upload_bytes_total (refused with SERVER_FULL beyond), released when the
 // upload ends either way; an upload without progress for upload_stall_timeout_s drops its
-// sender (TIMEOUT). Prop spawns: one per member per spawn_interval_s; faster requests are
-// ignored (logged).
+// sender (TIMEOUT); so does one slower than upload_min_rate_bytes_per_s over a window
+// after its grace, or one unfinished by its deadline (scaled by its size) — its slot goes
+// to a waiting member or the next newcomer. Rooms: a join that would open more rooms than
+// max_rooms_per_address created from its connection's address (setConnectionAddress) is
+// refused with SERVER_FULL ("rooms per address"). Prop spawns: one per member per spawn_interval_s;
+// faster requests are ignored (logged).
 //
 // Props: the lobby owns each room's prop list (ids, specs; the Roster carries them) and
 // tells rooms to spawn and remove; rooms decide positions and step them. A room starts
@@ -57,6 +68,9 @@ class Lobby {
   Lobby(const ServerConfig& config, std::uint64_t seed);
 
   void onConnect(ConnId conn, double now, Effects& fx);
+  // The source address of a connection (any stable spelling, e.g. "203.0.113.7"), for
+  // the per-address room limit; empty or never set: the connection is not limited.
+  void setConnectionAddress(ConnId conn, std::string address);
   void onStreamBytes(ConnId conn, std::span<const std::uint8_t> bytes, double now, Effects& fx);
   void onDisconnect(ConnId conn, double now, Effects& fx);
   // A datagram of type hello (any other is ignored).
@@ -97,12 +111,16 @@ class Lobby {
     explicit Connection(std::size_t max_frame) : decoder(max_frame) {}
     wire::FrameDecoder decoder;
     double opened_at = 0.0;
-    MemberId member;                    // 0 until joined
-    TokenBucket control;                // control message budget
-    std::vector<std::uint8_t> upload;   // avatar bytes received so far
-    std::uint64_t upload_reserved = 0;  // bytes counted in upload_bytes_in_flight_
-    std::string upload_hash;            // the avatar this connection uploads (or empty)
-    double upload_progress_at = 0.0;    // last chunk (or the join)
+    MemberId member;                      // 0 until joined
+    TokenBucket control;                  // control message budget
+    std::vector<std::uint8_t> upload;     // avatar bytes received so far
+    std::uint64_t upload_reserved = 0;    // bytes counted in upload_bytes_in_flight_
+    std::string upload_hash;              // the avatar this connection uploads (or empty)
+    double upload_progress_at = 0.0;      // last chunk (or the join)
+    double upload_started_at = 0.0;       // the upload's start (grace and deadline)
+    double upload_window_at = 0.0;        // start of the current rate window
+    std::size_t upload_window_bytes = 0;  // upload.size() then
+    std::string address;                  // source address ("" = not limited per address)
   };
   struct Member {
     MemberId id;
@@ -132,6 +150,7 @@ class Lobby {
     std::vector<MemberId> members;  // join order
     std::vector<bool> seat_taken;   // per seat
     std::vector<PropRecord> props;  // spawn order
+    std::string creator_address;    // counted in rooms_by_address_ ("" = not counted)
   };
 
   void handleMessage(ConnId conn, Connection& c, std::span<const std::uint8_t> payload, double now,
@@ -156,6 +175,21 @@ class Lobby {
   // Every member waiting for this hash becomes ready (their rooms learn the joint count
   // and get a new roster).
   void avatarBecameReady(const std::string& hash, Effects& fx);
+  // Aborts uploads that stalled, fell below the rate floor or passed their deadline
+  // (called by update()).
+  void checkUploads(double now, Effects& fx);
+  // Why an upload should be aborted now (empty reason: it may go on).
+  struct UploadProblem {
+    std::string_view
+        reason;           // counted drop reason: "upload stalled", "... too slow", "... deadline"
+    std::string message;  // the ErrorReply's text
+  };
+  UploadProblem uploadProblem(const Connection& c, double now) const;
+  // Per-address room limit: false (and the connection refused) when a room created by
+  // this connection would pass it; roomOpened/roomClosed keep the count.
+  bool mayCreateRoom(ConnId conn, const Connection& c, double now, Effects& fx);
+  void roomOpened(RoomRecord& room, const Connection& c);
+  void roomClosed(const RoomRecord& room);
   // Sends an ErrorReply, closes the connection and removes its member (logged and counted
   // under `reason`, by default the code's name).
   // retry_after_s > 0 marks the refusal transient (ErrorReply.retry_after_s).
@@ -183,6 +217,8 @@ class Lobby {
   double last_update_ = 0.0;
   // The one connection uploading each avatar hash; later joins with that hash wait for it.
   std::unordered_map<std::string, ConnId> uploader_of_;
+  // Rooms open that were created from each (limited) address.
+  std::unordered_map<std::string, int> rooms_by_address_;
   DropLog drops_{"lobby"};
   std::uint64_t seed_;
   std::mt19937_64 rng_;

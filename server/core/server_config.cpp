@@ -111,6 +111,17 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
   VISTEL_TRY(
       limits.number("max_upload_bytes_total", c.max_upload_bytes_total, 1024, 16.0 * (1ull << 30)));
   VISTEL_TRY(limits.number("upload_stall_timeout_s", c.upload_stall_timeout_s, 0.1, 3600));
+  VISTEL_TRY(limits.number("upload_min_rate_bytes_per_s", c.upload_min_rate_bytes_per_s, 0, 1e12));
+  VISTEL_TRY(limits.number("upload_rate_window_s", c.upload_rate_window_s, 0.1, 3600));
+  VISTEL_TRY(limits.number("upload_grace_s", c.upload_grace_s, 0, 3600));
+  VISTEL_TRY(limits.number("upload_deadline_base_s", c.upload_deadline_base_s, 0.1, 86400));
+  VISTEL_TRY(limits.number("upload_deadline_rate_bytes_per_s", c.upload_deadline_rate_bytes_per_s,
+                           1, 1e12));
+  VISTEL_TRY(limits.number("max_connections", c.max_connections, 0, 1000000));
+  VISTEL_TRY(
+      limits.number("max_connections_per_address", c.max_connections_per_address, 0, 1000000));
+  VISTEL_TRY(limits.number("max_rooms_per_address", c.max_rooms_per_address, 0, 65535));
+  VISTEL_TRY(limits.boolean("limit_loopback", c.limit_loopback));
   VISTEL_TRY(limits.number("max_queued_bytes_per_connection", c.max_queued_bytes_per_connection,
                            4096, 16.0 * (1ull << 30)));
   VISTEL_TRY(

@@ -48,10 +48,28 @@ struct ServerConfig {
   std::size_t max_queued_bytes_per_connection = 24u << 20;  // >= an avatar and a frame
   std::size_t max_queued_bytes_total = 256u << 20;
   double upload_stall_timeout_s = 15.0;  // an upload without a chunk for this long is dropped
-  double control_rate_hz = 20.0;         // control messages per second per connection,
-  int control_burst = 100;               // sustained, and in a burst (avatar chunks are free)
-  int max_primitives_per_avatar = 64;    // collision model limits checked at upload
-  float max_primitive_extent_m = 2.0f;   // largest side of a primitive's field box at rest
+  // Slow uploads (issue 20, finding 5): after upload_grace_s, an upload must move at least
+  // upload_min_rate_bytes_per_s averaged over each upload_rate_window_s (or what is left of
+  // it, if less), and finish within upload_deadline_base_s + announced size /
+  // upload_deadline_rate_bytes_per_s; else it is aborted (ErrorReply TIMEOUT) and its
+  // reservation freed. A rate of 0 turns that check off.
+  double upload_min_rate_bytes_per_s = 65536.0;
+  double upload_rate_window_s = 5.0;
+  double upload_grace_s = 5.0;
+  double upload_deadline_base_s = 30.0;
+  double upload_deadline_rate_bytes_per_s = 32768.0;
+  // Connections and rooms (0: no limit): open TCP connections in total and from one source
+  // address (refused at accept), rooms open that were created from one address (a join
+  // that would create one more is refused with SERVER_FULL). Loopback peers are exempt
+  // from the per-address limits unless limit_loopback (local bots and benchmarks).
+  int max_connections = 2048;
+  int max_connections_per_address = 32;
+  int max_rooms_per_address = 8;
+  bool limit_loopback = false;
+  double control_rate_hz = 20.0;        // control messages per second per connection,
+  int control_burst = 100;              // sustained, and in a burst (avatar chunks are free)
+  int max_primitives_per_avatar = 64;   // collision model limits checked at upload
+  float max_primitive_extent_m = 2.0f;  // largest side of a primitive's field box at rest
   // [room]
   SeatLayout seat_layout;  // rings of seats about the centre (seat_radius_m, seat_spacing_m,
                            // ring_gap_m)

@@ -91,6 +91,7 @@ void LoadStats::fillMetrics(MetricsSnapshot& out) const {
   out.bytes_out_udp = bytes_sent_.load(std::memory_order_relaxed);
   out.datagrams_in_total = datagrams_received_.load(std::memory_order_relaxed);
   out.datagrams_out_total = datagrams_sent_.load(std::memory_order_relaxed);
+  out.datagrams_dropped = datagram_drops_.byReason();
 }
 
 std::string LoadStats::totalsJson(double now) const {

@@ -13,9 +13,12 @@
 #include <atomic>
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <string>
+#include <string_view>
 
 #include "server/http/prometheus.hpp"
+#include "server/shell/datagram_drops.hpp"
 
 namespace vistel::server {
 
@@ -42,6 +45,12 @@ class LoadStats {
     datagrams_received_.fetch_add(1, std::memory_order_relaxed);
     bytes_received_.fetch_add(bytes, std::memory_order_relaxed);
   }
+  // A datagram dropped for `reason` (a phrase of routeDatagram or Room), counted by class
+  // (DatagramDrops); returns a summary line to log at info at most once per 10 s.
+  std::optional<std::string> addDatagramDrop(std::string_view reason, double now) {
+    return datagram_drops_.add(reason, now);
+  }
+  const DatagramDrops& datagramDrops() const { return datagram_drops_; }
   // The lobby's counts, sampled by whoever calls report().
   void setPopulation(int rooms, int members);
 
@@ -54,7 +63,8 @@ class LoadStats {
   // Process CPU time (user + system), seconds.
   static double processCpuSeconds();
 
-  // The totals a /metrics scrape reports (ticks, tick histogram, datagrams and bytes).
+  // The totals a /metrics scrape reports (ticks, tick histogram, datagrams and bytes,
+  // datagrams dropped by class).
   void fillMetrics(MetricsSnapshot& out) const;
 
  private:
@@ -89,6 +99,7 @@ class LoadStats {
   std::atomic<std::uint64_t> send_failures_{0};
   std::atomic<std::uint64_t> datagrams_received_{0};
   std::atomic<std::uint64_t> bytes_received_{0};
+  DatagramDrops datagram_drops_;
 };
 
 }  // namespace vistel::server

@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <cstring>
 #include <exception>
+#include <map>
 
 #if defined(__linux__)
 #include <poll.h>
@@ -14,6 +15,8 @@
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
+
+#include "common/wire/framing.hpp"
 
 namespace vistel::server {
 namespace {
@@ -55,6 +58,8 @@ struct ServerShell::TcpSession {
   TcpSession(asio::ip::tcp::socket s, ConnId c) : socket(std::move(s)), conn(c) {}
   asio::ip::tcp::socket socket;
   ConnId conn;
+  std::string address;    // the peer's IP address (ConnectionLimits key)
+  bool released = false;  // given back to ConnectionLimits
   std::vector<std::uint8_t> read_buffer = std::vector<std::uint8_t>(kReadChunk);
   std::deque<std::vector<std::uint8_t>> queue;  // frames waiting to be written
   std::size_t queued_bytes = 0;
@@ -72,6 +77,7 @@ struct ServerShell::RoomHost {
   Room room;   // its strand only
   Effects fx;  // its strand only; reused so that ticks allocate nothing once warm
   bool closed = false;
+  std::map<std::string, std::uint64_t, std::less<>> drops_seen;  // room.drops() counted so far
   std::uint64_t timer_generation = 0;  // a wait that is not the newest does nothing
   double armed_for = 0.0;              // server time the newest wait ends
 };
@@ -85,6 +91,7 @@ ServerShell::ServerShell(asio::io_context& io, const ServerConfig& config)
       lobby_timer_(lobby_strand_),
       stats_timer_(lobby_strand_),
       accept_timer_(lobby_strand_),
+      limits_(config.max_connections, config.max_connections_per_address, config.limit_loopback),
       lobby_(config, 0),
       udp_(io),
       udp_buffer_(65536) {}
@@ -196,26 +203,62 @@ void ServerShell::acceptFailed(const boost::system::error_code& ec) {
 void ServerShell::accept() {
   acceptor_.async_accept(
       asio::make_strand(io_),
-      asio::bind_executor(
-          lobby_strand_, [this](const boost::system::error_code& ec, asio::ip::tcp::socket socket) {
-            if (ec) {
-              if (ec != asio::error::operation_aborted && !stopping_) acceptFailed(ec);
-              return;
-            }
-            accept_backoff_s_ = 0.0;
-            if (stopping_) return;
-            auto session = std::make_shared<TcpSession>(std::move(socket), next_conn_++);
-            boost::system::error_code ignored;
-            session->socket.set_option(asio::ip::tcp::no_delay(true), ignored);
-            sessions_[session->conn] = session;
-            guarded("connect", [&] {
-              Effects fx;
-              lobby_.onConnect(session->conn, now(), fx);
-              applyLobbyEffects(fx);
-            });
-            read(session);
-            accept();
-          }));
+      asio::bind_executor(lobby_strand_, [this](const boost::system::error_code& ec,
+                                                asio::ip::tcp::socket socket) {
+        if (ec) {
+          if (ec != asio::error::operation_aborted && !stopping_) acceptFailed(ec);
+          return;
+        }
+        accept_backoff_s_ = 0.0;
+        if (stopping_) return;
+        // Admission: limits on connections in all and per source address.
+        boost::system::error_code ignored;
+        const auto peer = socket.remote_endpoint(ignored);
+        const std::string address = ignored ? std::string("?") : peer.address().to_string();
+        const bool loopback = !ignored && peer.address().is_loopback();
+        if (const std::string_view refused = limits_.admit(address, loopback); !refused.empty()) {
+          guarded("refuse", [&] { refuse(std::move(socket), address, refused); });
+          accept();
+          return;
+        }
+        auto session = std::make_shared<TcpSession>(std::move(socket), next_conn_++);
+        session->address = address;
+        session->socket.set_option(asio::ip::tcp::no_delay(true), ignored);
+        sessions_[session->conn] = session;
+        guarded("connect", [&] {
+          Effects fx;
+          lobby_.onConnect(session->conn, now(), fx);
+          // Loopback peers are not limited per address unless the config says so.
+          lobby_.setConnectionAddress(session->conn,
+                                      loopback && !config_.limit_loopback ? "" : address);
+          applyLobbyEffects(fx);
+        });
+        read(session);
+        accept();
+      }));
+}
+
+void ServerShell::refuse(asio::ip::tcp::socket socket, const std::string& address,
+                         std::string_view reason) {
+  refused_.drop(now(), reason,
+                fmt::format("{} ({} open, {} from this address)", address, limits_.open(),
+                            limits_.openFrom(address)));
+  // One ErrorReply, written in the background, then the socket closes.
+  control::ServerMessage msg;
+  msg.mutable_error()->set_code(control::ErrorReply::SERVER_FULL);
+  msg.mutable_error()->set_message(fmt::format("refused: {} reached", reason));
+  msg.mutable_error()->set_retry_after_s(5.0f);
+  const std::string payload = msg.SerializeAsString();
+  auto frame = std::make_shared<std::vector<std::uint8_t>>();
+  wire::appendFrame(
+      std::span(reinterpret_cast<const std::uint8_t*>(payload.data()), payload.size()), *frame);
+  auto held = std::make_shared<asio::ip::tcp::socket>(std::move(socket));
+  asio::async_write(*held, asio::buffer(*frame),
+                    [held, frame](const boost::system::error_code& /*ec*/, std::size_t /*n*/) {
+                      boost::system::error_code ignored;
+                      held->shutdown(asio::ip::tcp::socket::shutdown_both, ignored);
+                      held->close(ignored);
+                    });
 }
 
 void ServerShell::read(std::shared_ptr<TcpSession> s) {
@@ -283,6 +326,8 @@ void ServerShell::forget(TcpSession& s) {
   // The queue itself goes with the session (a write in flight still uses its front).
   queued_total_ -= std::min(queued_total_, s.queued_bytes);
   s.queued_bytes = 0;
+  if (!s.released) limits_.release(s.address);
+  s.released = true;
   sessions_.erase(s.conn);
 }
 
@@ -520,7 +565,9 @@ void ServerShell::onDatagram(std::shared_ptr<std::vector<std::uint8_t>> bytes,
       asio::post(lobby_strand_, [this, bytes, from] {
         guarded("hello", [&] {
           Effects fx;
+          if (lobby_.drops().total() != lobby_drops_total_) syncLobbyDrops(false);
           lobby_.onHello(*bytes, from, now(), fx);
+          if (lobby_.drops().total() != lobby_drops_total_) syncLobbyDrops(true);
           applyLobbyEffects(fx);
         });
       });
@@ -530,7 +577,9 @@ void ServerShell::onDatagram(std::shared_ptr<std::vector<std::uint8_t>> bytes,
       asio::post(host->strand, [this, host, bytes, from] {
         if (host->closed) return;
         guarded("room datagram", [&] {
+          const std::uint64_t dropped = host->room.drops().total();
           host->room.onDatagram(*bytes, from, now(), host->fx);
+          if (host->room.drops().total() != dropped) countRoomDrops(*host);
           applyRoomEffects(host->fx);
         });
         // A posture left waiting for its batch: wake up for it.
@@ -543,7 +592,34 @@ void ServerShell::onDatagram(std::shared_ptr<std::vector<std::uint8_t>> bytes,
     case DatagramRoute::Target::kDrop:
       spdlog::debug("dropped datagram: {} ({} bytes from {})", route.reason, bytes->size(),
                     from.toString());
+      countDrop(route.reason);
       break;
+  }
+}
+
+void ServerShell::countDrop(std::string_view reason) {
+  if (auto line = load_.addDatagramDrop(reason, now())) spdlog::info("{}", *line);
+}
+
+void ServerShell::syncLobbyDrops(bool hello) {
+  for (const auto& [reason, count] : lobby_.drops().counts()) {
+    auto it = lobby_drops_seen_.find(reason);
+    if (it == lobby_drops_seen_.end()) it = lobby_drops_seen_.emplace(reason, 0).first;
+    if (hello && it->second < count) {
+      for (std::uint64_t k = it->second; k < count; ++k) countDrop(reason);
+      hello_drops_[reason] += count - it->second;
+    }
+    it->second = count;
+  }
+  lobby_drops_total_ = lobby_.drops().total();
+}
+
+void ServerShell::countRoomDrops(RoomHost& host) {
+  // The reasons whose counts grew since the last look (a handful of entries).
+  for (const auto& [reason, count] : host.room.drops().counts()) {
+    auto it = host.drops_seen.find(reason);
+    if (it == host.drops_seen.end()) it = host.drops_seen.emplace(reason, 0).first;
+    for (; it->second < count; ++it->second) countDrop(reason);
   }
 }
 
@@ -562,8 +638,12 @@ void ServerShell::collectMetrics(std::function<void(std::string)> reply, bool re
     load_.fillMetrics(s);
     // The lobby's drops name refused joins and dropped connections alike.
     for (const auto& [reason, count] : lobby_.drops().counts()) {
-      s.connections_dropped[reason] = count;
+      auto hello = hello_drops_.find(reason);
+      const std::uint64_t datagrams = hello == hello_drops_.end() ? 0 : hello->second;
+      if (count > datagrams) s.connections_dropped[reason] = count - datagrams;
     }
+    // ... and the connections refused at accept.
+    for (const auto& [reason, count] : limits_.refusals()) s.connections_dropped[reason] = count;
     reply(formatMetrics(s));
   });
 }

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -27,6 +28,7 @@
 #include "server/core/room.hpp"
 #include "server/core/server_core.hpp"
 #include "server/shell/asio.hpp"
+#include "server/shell/connection_limits.hpp"
 #include "server/shell/load_stats.hpp"
 
 namespace vistel::server {
@@ -72,12 +74,22 @@ class ServerShell {
   void dropSlowPeer(TcpSession& s, std::string_view limit);
   void armStatsTimer();
   void accept();
+  // A connection refused at accept (ConnectionLimits): one ErrorReply SERVER_FULL saying
+  // why, then closed; logged at a bounded rate.
+  void refuse(asio::ip::tcp::socket socket, const std::string& address, std::string_view reason);
   // After a failed accept: retry after a growing wait, logging at a bounded rate.
   void acceptFailed(const boost::system::error_code& ec);
   void read(std::shared_ptr<TcpSession> s);
   void write(std::shared_ptr<TcpSession> s);
   void receiveDatagram();
   void onDatagram(std::shared_ptr<std::vector<std::uint8_t>> bytes, wire::Endpoint from);
+  // A datagram dropped for `reason`: counted in load_, summarised at info now and then.
+  void countDrop(std::string_view reason);
+  // Brings lobby_drops_seen_ up to the lobby's counts; with `hello`, what grew was dropped
+  // while handling a hello datagram: counted as datagram drops (lobby strand).
+  void syncLobbyDrops(bool hello);
+  // Counts what a room's last datagram made it drop (room strand).
+  void countRoomDrops(RoomHost& host);
   // Carries out what a core asked for. Lobby effects run on the lobby strand; room
   // effects on the room's strand (their timeouts are posted to the lobby strand).
   void applyLobbyEffects(Effects& fx);
@@ -97,6 +109,13 @@ class ServerShell {
   double accept_logged_at_ = -1e300;   // ... the last report
   std::uint64_t accept_failures_ = 0;  // ... failures since it
   LoadStats load_;
+  ConnectionLimits limits_;    // lobby strand only
+  DropLog refused_{"accept"};  // lobby strand: refusals at accept (logged, bounded)
+  // Lobby strand: the lobby's drop counts as last seen, and those that were hellos (the
+  // rest are refused or dropped connections).
+  std::map<std::string, std::uint64_t, std::less<>> lobby_drops_seen_;
+  std::map<std::string, std::uint64_t, std::less<>> hello_drops_;
+  std::uint64_t lobby_drops_total_ = 0;
   Lobby lobby_;                                                       // lobby strand only
   std::unordered_map<ConnId, std::shared_ptr<TcpSession>> sessions_;  // lobby strand only
   ConnId next_conn_ = 1;

@@ -74,6 +74,8 @@ TEST(ServerPause, AnUploadIsNotStalledByAPauseOfTheServer) {
   spdlog::set_level(spdlog::level::err);
   ServerConfig config;
   config.upload_stall_timeout_s = 15.0;
+  config.upload_min_rate_bytes_per_s = 0.0;  // the stall timeout alone (no rate floor)
+  config.upload_deadline_base_s = 3600.0;
   Lobby lobby(config, 5);
   Effects fx;
   lobby.onConnect(7, 0.0, fx);
