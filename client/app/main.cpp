@@ -6,7 +6,8 @@
 //                 [--frames DIR [--frames-every N]] [--config FILE] [--ball] [--rigid-only]
 //                 [--sensors FILE.toml [--calibrate-after S] | --source sim:CLIP.bvh
 //                  | --source recording:FILE.vrec] [--record FILE.vrec]
-//                 [--forces-out FILE.csv] [--force-feedback SENSORS.toml]
+//                 [--forces-out FILE.csv] [--force-feedback SENSORS.toml] [--log-level LEVEL]
+//   vistel-client --version   (the project version and the protocol versions it speaks)
 //
 // With sensors (client/app/sensor_input.hpp) a sensor thread reads the devices (or the
 // simulated rig, or a recording), solves the own posture and sends it; C in the window
@@ -32,8 +33,9 @@
 //
 // Threads: this (main) thread owns the window/GL and renders; a network thread runs
 // Asio (NetDriver); a source thread produces the own postures; the room view skins in
-// its worker pool. Exit status: 0, 1 on an error (the session's reason is printed), 2 on
-// bad usage. SIGINT/SIGTERM leave the room cleanly.
+// its worker pool. Exit status: 0, 1 on an error (the session's reason is printed; a
+// session the server refused until the end counts), 2 on bad usage (an unknown
+// --log-level too). SIGINT/SIGTERM leave the room cleanly.
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -69,6 +71,8 @@
 #include "common/avatar/avatar_io.hpp"
 #include "common/base/file.hpp"
 #include "common/motion/bvh.hpp"
+#include "common/wire/packets.hpp"
+#include "vistel_version.hpp"
 
 namespace {
 
@@ -243,8 +247,22 @@ int main(int argc, char** argv) {
                  "(default: the --sensors file)");
   SensorArgs sensor_args;
   addSensorOptions(app, sensor_args);
+  std::string log_level = "info";
+  app.add_option("--log-level", log_level, "trace, debug, info, warn, error, off (default: info)");
+  app.set_version_flag("--version",
+                       vistel::versionLine("vistel-client", vistel::net::kProtocolVersion,
+                                           vistel::wire::kWireVersion));
   CLI11_PARSE(app, argc, argv);
   spdlog::set_default_logger(spdlog::stderr_color_mt("vistel-client"));
+  // spdlog reads an unknown name as "off": refuse it rather than go silent.
+  if (log_level != "off" && spdlog::level::from_str(log_level) == spdlog::level::off) {
+    std::fprintf(stderr,
+                 "vistel-client: --log-level '%s': expected trace, debug, info, warn, error or "
+                 "off\n",
+                 log_level.c_str());
+    return 2;
+  }
+  spdlog::set_level(spdlog::level::from_str(log_level));
 
   if (headless && (!screenshot.empty() || !frames_dir.empty())) {
     std::fprintf(stderr,
@@ -571,6 +589,14 @@ int main(int argc, char** argv) {
   }
   std::printf("vistel-client:%s\n", summary.c_str());
   std::fflush(stdout);
+  // Refused (or unanswered) until the end: not a successful run.
+  if (exit_code == 0 && driver->secondsToLive() < 0.0) {
+    std::string error = driver->error();
+    if (error.empty()) error = driver->lastCloseReason();
+    std::fprintf(stderr, "vistel-client: never joined room '%s'%s%s\n", room.c_str(),
+                 error.empty() ? "" : ": ", error.c_str());
+    exit_code = 1;
+  }
 
   stop_source = true;
   source_thread.join();

@@ -4,7 +4,8 @@
 //
 //   vistel-bot --server HOST:PORT --room R --name N (--bvh FILE | --recording FILE)
 //              [--avatar FILE] [--loop] [--duration S] [--count K] [--config FILE]
-//              [--stats-json FILE]
+//              [--stats-json FILE] [--log-level LEVEL]
+//   vistel-bot --version
 //
 // K participants (named N-1 .. N-K when K > 1, else N) join room R, each with the avatar
 // (default: default.vavatar in the data folder), and stream the clip retargeted onto
@@ -16,7 +17,9 @@
 // cleanly. A join refused for a transient reason (the server full, say) is tried again
 // with a jittered backoff (NetDriver). --stats-json writes, at the end, each
 // participant's join time, retries, bytes and latency (client/bot/bot_report.hpp).
-// Never initialises GLFW. Exit status: 0, 1 on an error, 2 on bad usage.
+// Never initialises GLFW. Exit status: 0, 1 on an error (a participant the server refused
+// or dropped included: the refusal is printed), 2 on bad usage (an unknown --log-level too).
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -42,6 +45,8 @@
 #include "common/avatar/avatar_io.hpp"
 #include "common/base/file.hpp"
 #include "common/motion/bvh.hpp"
+#include "common/wire/packets.hpp"
+#include "vistel_version.hpp"
 
 namespace {
 
@@ -77,8 +82,20 @@ int main(int argc, char** argv) {
   app.add_option("--config", config_path, "client settings (TOML); built-in defaults if absent");
   app.add_option("--stats-json", stats_path,
                  "write each participant's join time, bytes and latency as JSON at the end");
+  std::string log_level = "info";
+  app.add_option("--log-level", log_level, "trace, debug, info, warn, error, off (default: info)");
+  app.set_version_flag("--version",
+                       versionLine("vistel-bot", net::kProtocolVersion, wire::kWireVersion));
   CLI11_PARSE(app, argc, argv);
   spdlog::set_default_logger(spdlog::stderr_color_mt("vistel-bot"));
+  // spdlog reads an unknown name as "off": refuse it rather than go silent.
+  if (log_level != "off" && spdlog::level::from_str(log_level) == spdlog::level::off) {
+    std::fprintf(stderr,
+                 "vistel-bot: --log-level '%s': expected trace, debug, info, warn, error or off\n",
+                 log_level.c_str());
+    return 2;
+  }
+  spdlog::set_level(spdlog::level::from_str(log_level));
 
   if (bvh_opt->count() == 0 && rec_opt->count() == 0) {
     std::fprintf(stderr, "vistel-bot: give a source: --bvh FILE or --recording FILE\n");
@@ -246,6 +263,12 @@ int main(int argc, char** argv) {
         [](const ClientSession& s, double) { return s.stats().postures_sent; });
     if (drivers[i]->state() == SessionState::kClosed && !error.empty()) {
       std::fprintf(stderr, "vistel-bot: %s: %s\n", names[i].c_str(), error.c_str());
+      exit_code = 1;
+    } else if (drivers[i]->secondsToLive() < 0.0) {
+      // Refused (or unanswered) until the end: the run did not do what was asked.
+      const std::string why = error.empty() ? drivers[i]->lastCloseReason() : error;
+      std::fprintf(stderr, "vistel-bot: %s: never joined room '%s'%s%s\n", names[i].c_str(),
+                   room.c_str(), why.empty() ? "" : ": ", why.c_str());
       exit_code = 1;
     }
     std::printf("vistel-bot: %s sent %llu postures\n", names[i].c_str(),

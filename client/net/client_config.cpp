@@ -45,6 +45,8 @@ Result<ClientConfig> parseClientConfig(std::string_view toml_text, std::string_v
   VISTEL_CONFIG_TRY(network.number("join_timeout_s", s.join_timeout_s, 0.1, 600));
   VISTEL_CONFIG_TRY(network.number("ping_interval_s", s.ping_interval_s, 0.01, 60));
   VISTEL_CONFIG_TRY(network.number("server_timeout_s", s.server_timeout_s, 0.5, 3600));
+  VISTEL_CONFIG_TRY(network.number("rehello_after_s", s.rehello_after_s, 0.1, 3600));
+  VISTEL_CONFIG_TRY(network.number("reconnect_give_up_s", s.reconnect_give_up_s, 0, 86400));
   VISTEL_CONFIG_TRY(network.checkUnknown());
 
   ConfigTable playback(root, "playback", source_name);

@@ -66,10 +66,11 @@ void ClientSession::sendControl(const std::string& payload) {
       outbox_.stream);
 }
 
-void ClientSession::close(const std::string& reason) {
+void ClientSession::close(const std::string& reason, CloseCause cause) {
   if (state_ == SessionState::kClosed) return;
   state_ = SessionState::kClosed;
   error_ = reason;
+  close_cause_ = cause;
   outbox_.close = true;
 }
 
@@ -83,6 +84,10 @@ void ClientSession::start(double now) {
   join.set_name(settings_.name);
   join.set_avatar_hash(settings_.avatar_hash);
   join.set_avatar_size(settings_.avatar_bytes ? settings_.avatar_bytes->size() : 0);
+  if (settings_.resume_member_id != 0) {
+    join.set_resume_member_id(settings_.resume_member_id);
+    join.set_resume_key(settings_.resume_key);
+  }
   sendControl(msg.SerializeAsString());
 }
 
@@ -99,7 +104,7 @@ void ClientSession::leave(const std::string& reason) {
   control::ClientMessage msg;
   msg.mutable_leave()->set_reason(reason);
   sendControl(msg.SerializeAsString());
-  close("left: " + reason);
+  close("left: " + reason, CloseCause::kLeft);
   error_.clear();
 }
 
@@ -138,6 +143,7 @@ void ClientSession::handleMessage(const control::ServerMessage& msg, double now)
       }
       member_id_ = w.member_id();
       key_ = w.udp_key();
+      room_name_ = w.room();
       tick_rate_hz_ = w.tick_rate_hz();
       clock_.seed(w.server_time(), now);
       spdlog::info("joined room '{}' as member {:#x} ({} Hz ticks)", w.room(), member_id_,
@@ -178,10 +184,28 @@ void ClientSession::handleMessage(const control::ServerMessage& msg, double now)
       uploadAvatar(std::clamp<std::size_t>(msg.upload_avatar().max_chunk_bytes(), 256, 1u << 20));
       return;
     case control::ServerMessage::kError: {
+      // Sorted for the driver: busy (a hint), gone (the server went away or dropped us),
+      // taken (name or room), or refused for good.
       const float hint = msg.error().retry_after_s();
+      const bool busy = std::isfinite(hint) && hint > 0.0f;
+      CloseCause cause = CloseCause::kRefused;
+      switch (msg.error().code()) {
+        case control::ErrorReply::TIMEOUT:
+        case control::ErrorReply::SHUTTING_DOWN:
+          cause = CloseCause::kLost;
+          break;
+        case control::ErrorReply::NAME_TAKEN:
+        case control::ErrorReply::ROOM_FULL:
+          cause = CloseCause::kTaken;
+          break;
+        default:
+          break;
+      }
+      if (busy) cause = CloseCause::kBusy;
       close(fmt::format("server: {}: {}", control::ErrorReply::Code_Name(msg.error().code()),
-                        msg.error().message()));
-      if (std::isfinite(hint) && hint > 0.0f) retry_after_s_ = std::min(3600.0, double{hint});
+                        msg.error().message()),
+            cause);
+      if (busy) retry_after_s_ = std::min(3600.0, double{hint});
       return;
     }
     case control::ServerMessage::BODY_NOT_SET:
@@ -191,7 +215,7 @@ void ClientSession::handleMessage(const control::ServerMessage& msg, double now)
 
 void ClientSession::uploadAvatar(std::size_t chunk_bytes) {
   if (!settings_.avatar_bytes || settings_.avatar_bytes->empty()) {
-    close("the server asks for our avatar but we have no avatar file");
+    close("the server asks for our avatar but we have no avatar file", CloseCause::kRefused);
     return;
   }
   const std::vector<std::uint8_t>& bytes = *settings_.avatar_bytes;
@@ -351,20 +375,29 @@ void ClientSession::onDatagram(std::span<const std::uint8_t> datagram, double no
       ++stats_.datagrams_rejected;
       return;
     }
-    last_server_datagram_ = now;
     if (ack.cookie != 0) {
-      // A challenge: our address is bound once we echo it (WIRE.md §3.2).
-      if (state_ == SessionState::kHandshaking && ack.cookie != hello_cookie_) {
+      // A challenge: our address is bound once we echo it (WIRE.md §3.2). In kLive it
+      // means the server sees us at a new address (NAT rebinding). A challenge is not a
+      // sign of life: a server that only challenges still times out.
+      if ((state_ == SessionState::kHandshaking || rebinding_) && ack.cookie != hello_cookie_) {
         hello_cookie_ = ack.cookie;
+        rebind_challenged_ = rebinding_;
         sendHello(now);
       }
       return;
     }
+    last_server_datagram_ = now;
     if (state_ == SessionState::kHandshaking) {
       state_ = SessionState::kLive;
       state_since_ = now;
       next_ping_ = now;
       spdlog::info("UDP handshake done after {} hello(s)", hello_attempt_);
+    } else if (rebinding_) {
+      rebinding_ = false;
+      ++stats_.udp_rehellos;
+      if (rebind_challenged_) ++stats_.udp_rebinds;
+      spdlog::info(rebind_challenged_ ? "the server moved us to our new UDP address"
+                                      : "the server answers our UDP hellos again");
     }
   } else if (type == wire::PacketType::kPong) {
     wire::PongPacket pong;
@@ -512,7 +545,8 @@ void ClientSession::update(double now) {
   switch (state_) {
     case SessionState::kJoining:
       if (now - state_since_ > settings_.join_timeout_s) {
-        close(fmt::format("no Welcome from the server within {:.0f} s", settings_.join_timeout_s));
+        close(fmt::format("no Welcome from the server within {:.0f} s", settings_.join_timeout_s),
+              CloseCause::kBusy);
         retry_after_s_ = 1.0;  // a busy server: worth another try
       }
       break;
@@ -530,9 +564,20 @@ void ClientSession::update(double now) {
       if (now - last_server_datagram_ > settings_.server_timeout_s) {
         close(
             fmt::format("no UDP traffic from the server for {:.0f} s", settings_.server_timeout_s));
-      } else if (now >= next_ping_) {
-        sendPing(now);
+        break;
       }
+      // The server's datagrams stopped: hello again (a fresh challenge if our address
+      // changed) until a plain ack says the server has us at this address.
+      if (!rebinding_ && now - last_server_datagram_ > settings_.rehello_after_s) {
+        rebinding_ = true;
+        rebind_challenged_ = false;
+        hello_cookie_ = 0;
+        next_hello_ = now;
+        spdlog::info("nothing from the server over UDP for {:.1f} s: saying hello again",
+                     now - last_server_datagram_);
+      }
+      if (rebinding_ && now >= next_hello_) sendHello(now);
+      if (now >= next_ping_) sendPing(now);
       break;
     case SessionState::kClosed:
       break;

@@ -9,7 +9,16 @@
 // kLive (postures out, snapshots in, pings for the clock) -> kClosed (error() says why:
 // a server ErrorReply, a disconnect, a handshake timeout, server silence, a protocol
 // violation). Input that breaks the protocol from the server closes the session with a
-// message; malformed datagrams are only counted.
+// message; malformed datagrams are only counted. closeCause() sorts the reasons for the
+// driver: what may clear by itself (a lost connection, a busy server) and what will not (a
+// refusal of this client's request).
+//
+// Resuming (proto/SESSION.md §4): a session made for reconnecting carries the previous
+// Welcome's member id and UDP key in its Join (SessionSettings::resume_*), so the server
+// replaces our stale member instead of refusing the name. NAT rebinding: in kLive, when
+// nothing came from the server for rehello_after_s, the session says hello again every
+// hello_interval_s (echoing a challenge, as in the first handshake) until a plain ack:
+// the server moves the member to a changed address only after that check.
 //
 // The shared room's collision world (DESIGN.md §6: the server owns it): the session keeps
 // the room's props (static spec from the Roster, states from snapshots in a PropTrack
@@ -65,8 +74,16 @@ struct SessionSettings {
   double ping_interval_s = 1.0;
   int fast_pings = 10;  // the first pings go out faster, to converge quickly
   double fast_ping_interval_s = 0.05;
-  int clock_window = 16;                     // ClockSync window
-  double server_timeout_s = 10.0;            // no datagram from the server this long: closed
+  int clock_window = 16;           // ClockSync window
+  double server_timeout_s = 10.0;  // no datagram from the server this long: closed
+  double rehello_after_s = 2.0;    // kLive, no datagram this long: hellos again
+  // Reconnecting (NetDriver): after a live session is lost, join again for this long
+  // (seconds from the loss) before giving up; 0: never reconnect.
+  double reconnect_give_up_s = 180.0;
+  // The previous Welcome's member id and UDP key when this session resumes one (sent in the
+  // Join; 0: a first join).
+  std::uint32_t resume_member_id = 0;
+  std::uint64_t resume_key = 0;
   int jitter_capacity = 32;                  // postures kept per remote member
   int prop_track_capacity = 32;              // states kept per prop
   std::size_t max_frame_bytes = 1u << 20;    // control frames accepted from the server
@@ -76,6 +93,18 @@ struct SessionSettings {
 
 enum class SessionState { kJoining, kHandshaking, kLive, kClosed };
 const char* sessionStateName(SessionState state);
+
+// Why a session closed.
+enum class CloseCause {
+  kNone,     // not closed
+  kLeft,     // leave()
+  kRefused,  // refused for good: protocol version, bad room/name/hash, avatar rejected, a
+             // message the server called bad, rate limited, no avatar file to upload
+  kTaken,    // NAME_TAKEN or ROOM_FULL: final for a first join, may clear when resuming
+  kBusy,     // a transient refusal: retryAfter() > 0 (server full, no Welcome in time)
+  kLost,     // the connection dropped, the server went silent or shut down, dropped us
+             // (TIMEOUT), the UDP handshake timed out, or the server broke the protocol
+};
 
 struct Seat {
   float x = 0.0f;
@@ -168,7 +197,13 @@ class ClientSession {
   // Closed by a refusal the server called transient (ErrorReply.retry_after_s, or no
   // Welcome in time): seconds it suggests waiting before joining again; 0 otherwise.
   double retryAfter() const { return retry_after_s_; }
+  CloseCause closeCause() const { return close_cause_; }
+  // From the Welcome (0 before it): what a later session needs to resume this one.
   std::uint32_t memberId() const { return member_id_; }
+  std::uint64_t udpKey() const { return key_; }
+  const std::string& roomName() const { return room_name_; }
+  // Re-saying hello in kLive (the server's datagrams stopped) until the server acks.
+  bool rehelloing() const { return rebinding_; }
   double tickRateHz() const { return tick_rate_hz_; }
   const ClockSync& clock() const { return clock_; }
   double serverTime(double now) const { return clock_.serverTime(now); }
@@ -178,6 +213,10 @@ class ClientSession {
   // The posture of a remote member at a server time (see JitterBuffer::sample).
   bool samplePosture(std::uint32_t member_id, double server_time, Posture& out) const;
   const SessionStats& stats() const { return stats_; }
+  // A session replacing a lost one continues its counters (NetDriver), and counts the
+  // reconnection once live again.
+  void carryStats(SessionStats previous) { stats_ = std::move(previous); }
+  void countReconnect() { ++stats_.reconnects; }
 
   // The room's props, in the server's order (the Roster's).
   const std::vector<std::unique_ptr<RemoteProp>>& props() const { return props_; }
@@ -225,13 +264,15 @@ class ClientSession {
   void sendHello(double now);
   void sendPing(double now);
   void sendControl(const std::string& payload);
-  void close(const std::string& reason);
+  void close(const std::string& reason, CloseCause cause = CloseCause::kLost);
 
   SessionSettings settings_;
   std::shared_ptr<AvatarCache> cache_;
   SessionState state_ = SessionState::kJoining;
   std::string error_;
+  CloseCause close_cause_ = CloseCause::kNone;
   double retry_after_s_ = 0.0;
+  std::string room_name_;
   wire::FrameDecoder decoder_;
   SessionOutbox outbox_;
 
@@ -245,6 +286,8 @@ class ClientSession {
   std::uint32_t hello_attempt_ = 0;
   std::uint64_t hello_cookie_ = 0;  // the server's challenge to our address (0: none yet)
   double next_hello_ = 0.0;
+  bool rebinding_ = false;          // kLive: hellos again until a plain ack
+  bool rebind_challenged_ = false;  // ... and the server challenged us (a new address)
 
   std::uint32_t ping_id_ = 0;
   double next_ping_ = 0.0;

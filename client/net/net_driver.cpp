@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <functional>
+#include <limits>
 #include <random>
 
 #include <spdlog/spdlog.h>
@@ -10,6 +11,16 @@ namespace vistel::net {
 namespace {
 
 constexpr auto kTimerPeriod = std::chrono::milliseconds(5);
+
+// Reconnecting backs off like a refused join but is bounded by time, not attempts.
+BackoffSettings reconnectBackoff(BackoffSettings b) {
+  b.max_attempts = std::numeric_limits<int>::max();
+  return b;
+}
+
+std::uint64_t backoffSeed(const std::string& name, std::uint64_t salt) {
+  return (std::random_device{}() ^ std::hash<std::string>{}(name)) + salt;
+}
 
 }  // namespace
 
@@ -67,7 +78,8 @@ NetDriver::NetDriver(asio::io_context& io, ServerAddress server, SessionSettings
       settings_(std::move(settings)),
       cache_(std::move(cache)),
       session_(std::make_unique<ClientSession>(settings_, cache_)),
-      backoff_(backoff, std::random_device{}() ^ std::hash<std::string>{}(settings_.name)),
+      backoff_(backoff, backoffSeed(settings_.name, 0)),
+      reconnect_backoff_(reconnectBackoff(backoff), backoffSeed(settings_.name, 1)),
       retry_timer_(strand_),
       read_buffer_(16u << 10),
       datagram_buffer_(65536) {
@@ -79,6 +91,11 @@ NetDriver::~NetDriver() = default;
 int NetDriver::rejoins() const {
   std::lock_guard lock(mutex_);
   return rejoins_;
+}
+
+int NetDriver::reconnects() const {
+  std::lock_guard lock(mutex_);
+  return reconnects_;
 }
 
 double NetDriver::secondsToLive() const {
@@ -98,22 +115,90 @@ void NetDriver::maybeRejoin() {
   double delay = -1.0;
   {
     std::lock_guard lock(mutex_);
-    const double hint = session_->retryAfter();
-    if (stopping_ || session_->state() != SessionState::kClosed || hint <= 0.0) return;
-    delay = backoff_.nextDelay(hint);
-    if (delay < 0.0) {
-      spdlog::warn("'{}': the join was refused {} times in a row; giving up: {}", settings_.name,
-                   backoff_.attempts(), session_->error());
+    if (stopping_ || ended_ || session_->state() != SessionState::kClosed) return;
+    const double now = monotonicSeconds();
+    const CloseCause cause = session_->closeCause();
+    const std::string& why = session_->error();
+    if (!why.empty()) last_close_reason_ = why;  // kept across the fresh sessions below
+    // The newest Welcome is what a later join resumes.
+    if (session_->memberId() != 0) {
+      resume_member_id_ = session_->memberId();
+      resume_key_ = session_->udpKey();
+    }
+
+    // Whether to try again: a busy server always (within the backoff's attempts); after a
+    // live session, whatever may clear by itself (within the give-up time).
+    const bool reconnecting = ever_live_ && settings_.reconnect_give_up_s > 0.0;
+    double hint = 0.0;
+    bool retry = false;
+    switch (cause) {
+      case CloseCause::kBusy:
+        retry = true;
+        hint = session_->retryAfter();
+        break;
+      case CloseCause::kLost:
+        retry = reconnecting;
+        break;
+      case CloseCause::kTaken:
+        retry = reconnecting;  // our stale member may hold the name until it times out
+        hint = 1.0;
+        break;
+      case CloseCause::kNone:
+      case CloseCause::kLeft:
+      case CloseCause::kRefused:
+        break;
+    }
+    if (!retry) {
+      ended_ = true;
+      if (reconnecting && cause == CloseCause::kRefused) {
+        spdlog::error("'{}': the server refused to take us back: {}", settings_.name, why);
+      }
       return;
     }
-    if (backoff_.attempts() == 1) {
-      spdlog::warn("'{}': {}; joining again in {:.2f} s (and backing off while refused)",
-                   settings_.name, session_->error(), delay);
+
+    if (reconnecting) {
+      // Back off with jitter until live again or the give-up time has passed.
+      if (lost_at_ < 0.0) {
+        lost_at_ = now;
+        spdlog::warn("'{}': lost the session ({}); reconnecting", settings_.name, why);
+      }
+      if (now - lost_at_ > settings_.reconnect_give_up_s) {
+        spdlog::error("'{}': not back within {:.0f} s; giving up: {}", settings_.name,
+                      settings_.reconnect_give_up_s, why);
+        ended_ = true;
+        return;
+      }
+      delay = reconnect_backoff_.nextDelay(hint);
+      if (reconnect_backoff_.attempts() == 1) {
+        spdlog::info("'{}': reconnecting in {:.1f} s (attempt 1)", settings_.name, delay);
+      } else {
+        spdlog::info("'{}': not back yet ({}); reconnecting in {:.1f} s (attempt {})",
+                     settings_.name, why, delay, reconnect_backoff_.attempts());
+      }
+      settings_.resume_member_id = resume_member_id_;
+      settings_.resume_key = resume_key_;
     } else {
-      spdlog::debug("'{}': refused again ({}); attempt {} in {:.2f} s", settings_.name,
-                    session_->error(), backoff_.attempts() + 1, delay);
+      // A join refused for a transient reason: again, backing off.
+      delay = backoff_.nextDelay(hint);
+      if (delay < 0.0) {
+        spdlog::warn("'{}': the join was refused {} times in a row; giving up: {}", settings_.name,
+                     backoff_.attempts(), why);
+        ended_ = true;
+        return;
+      }
+      if (backoff_.attempts() == 1) {
+        spdlog::warn("'{}': {}; joining again in {:.2f} s (and backing off while refused)",
+                     settings_.name, why, delay);
+      } else {
+        spdlog::debug("'{}': refused again ({}); attempt {} in {:.2f} s", settings_.name, why,
+                      backoff_.attempts() + 1, delay);
+      }
     }
+    // A fresh session that continues the counters.
+    SessionStats stats = session_->stats();
     session_ = std::make_unique<ClientSession>(settings_, cache_);
+    session_->carryStats(std::move(stats));
+    session_live_ = false;
     ++rejoins_;
   }
   retry_timer_.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
@@ -122,6 +207,22 @@ void NetDriver::maybeRejoin() {
     if (ec || stopping_) return;
     connect();
   });
+}
+
+void NetDriver::noteLive(double now) {
+  if (session_live_ || session_->state() != SessionState::kLive) return;
+  session_live_ = true;
+  ever_live_ = true;
+  if (live_after_s_ < 0.0) live_after_s_ = now - started_at_;
+  backoff_.reset();
+  if (lost_at_ >= 0.0) {
+    ++reconnects_;
+    session_->countReconnect();
+    spdlog::info("'{}': rejoined room '{}' as '{}' after {:.1f} s (reconnect {})", settings_.name,
+                 session_->roomName(), settings_.name, now - lost_at_, reconnects_);
+    lost_at_ = -1.0;
+    reconnect_backoff_.reset();
+  }
 }
 
 void NetDriver::connect() {
@@ -135,44 +236,46 @@ void NetDriver::connect() {
   tcp_ = asio::ip::tcp::socket(strand_);
   udp_ = asio::ip::udp::socket(strand_);
   auto self = shared_from_this();
-  resolver_.async_resolve(
-      server_.host, std::to_string(server_.port),
-      [this, self](const boost::system::error_code& ec,
-                   asio::ip::tcp::resolver::results_type results) {
-        if (ec) {
-          fail("cannot resolve '" + server_.host + "': " + ec.message());
-          return;
-        }
-        asio::async_connect(
-            tcp_, results,
-            [this, self](const boost::system::error_code& cec,
-                         const asio::ip::tcp::endpoint& endpoint) {
-              if (cec) {
-                fail("cannot connect to " + server_.host + ":" + std::to_string(server_.port) +
-                     ": " + cec.message());
-                return;
-              }
-              boost::system::error_code e;
-              tcp_.set_option(asio::ip::tcp::no_delay(true), e);
-              // UDP to the same address and port, connected (only its datagrams arrive).
-              const asio::ip::udp::endpoint udp_ep(endpoint.address(), endpoint.port());
-              udp_.open(udp_ep.protocol(), e);
-              if (!e) udp_.connect(udp_ep, e);
-              if (e) {
-                fail("cannot open UDP to " + udp_ep.address().to_string() + ": " + e.message());
-                return;
-              }
-              connected_ = true;
-              {
-                std::lock_guard lock(mutex_);
-                session_->start(monotonicSeconds());
-              }
-              flush();
-              readStream();
-              readDatagram();
-              armTimer();
-            });
-      });
+  auto on_resolved = [this, self](const boost::system::error_code& ec,
+                                  asio::ip::tcp::resolver::results_type results) {
+    if (ec) {
+      fail("cannot resolve '" + server_.host + "': " + ec.message());
+      return;
+    }
+    auto on_connect = [this, self](const boost::system::error_code& cec,
+                                   const asio::ip::tcp::endpoint& endpoint) {
+      if (cec) {
+        fail("cannot connect to " + server_.host + ":" + std::to_string(server_.port) + ": " +
+             cec.message());
+        return;
+      }
+      onConnected(endpoint);
+    };
+    asio::async_connect(tcp_, results, std::move(on_connect));
+  };
+  resolver_.async_resolve(server_.host, std::to_string(server_.port), std::move(on_resolved));
+}
+
+void NetDriver::onConnected(const asio::ip::tcp::endpoint& endpoint) {
+  boost::system::error_code e;
+  tcp_.set_option(asio::ip::tcp::no_delay(true), e);
+  // UDP to the same address and port, connected (only its datagrams arrive).
+  udp_server_ = asio::ip::udp::endpoint(endpoint.address(), endpoint.port());
+  udp_.open(udp_server_.protocol(), e);
+  if (!e) udp_.connect(udp_server_, e);
+  if (e) {
+    fail("cannot open UDP to " + udp_server_.address().to_string() + ": " + e.message());
+    return;
+  }
+  connected_ = true;
+  {
+    std::lock_guard lock(mutex_);
+    session_->start(monotonicSeconds());
+  }
+  flush();
+  readStream();
+  readDatagram();
+  armTimer();
 }
 
 void NetDriver::stop(const std::string& reason) {
@@ -182,6 +285,7 @@ void NetDriver::stop(const std::string& reason) {
     retry_timer_.cancel();
     {
       std::lock_guard lock(mutex_);
+      ended_ = true;
       session_->leave(reason);
     }
     if (!connected_) {
@@ -215,12 +319,37 @@ bool NetDriver::requestBall() {
 
 SessionState NetDriver::state() const {
   std::lock_guard lock(mutex_);
-  return session_->state();
+  // A closed session about to be replaced (a rejoin pending) is still joining.
+  const SessionState s = session_->state();
+  return s == SessionState::kClosed && !ended_ ? SessionState::kJoining : s;
+}
+
+void NetDriver::reopenDatagramSocket() {
+  asio::post(strand_, [this, self = shared_from_this()] {
+    if (!connected_ || closed_) return;
+    boost::system::error_code e;
+    udp_.close(e);
+    udp_ = asio::ip::udp::socket(strand_);
+    udp_.open(udp_server_.protocol(), e);
+    if (!e) udp_.connect(udp_server_, e);
+    if (e) {
+      fail("cannot reopen UDP to " + udp_server_.address().to_string() + ": " + e.message());
+      return;
+    }
+    spdlog::info("'{}': UDP socket reopened on local port {}", settings_.name,
+                 udp_.local_endpoint(e).port());
+    readDatagram();
+  });
 }
 
 std::string NetDriver::error() const {
   std::lock_guard lock(mutex_);
   return session_->error();
+}
+
+std::string NetDriver::lastCloseReason() const {
+  std::lock_guard lock(mutex_);
+  return last_close_reason_;
 }
 
 void NetDriver::fail(const std::string& reason) {
@@ -262,7 +391,20 @@ void NetDriver::flush() {
     udp_.send(asio::buffer(d), 0, ec);
   }
   if (!stream.empty()) write_queue_.push_back(std::move(stream));
-  if (close) close_after_write_ = true;
+  if (close) {
+    // Only a Leave is worth waiting for; a lost or refused session closes at once (a dead
+    // server may never take the bytes).
+    bool left = false;
+    {
+      std::lock_guard lock(mutex_);
+      left = session_->closeCause() == CloseCause::kLeft;
+    }
+    if (!left) {
+      closeSockets();
+      return;
+    }
+    close_after_write_ = true;
+  }
   writeStream();
 }
 
@@ -306,17 +448,21 @@ void NetDriver::readStream() {
 }
 
 void NetDriver::readDatagram() {
-  udp_.async_receive(
-      asio::buffer(datagram_buffer_),
-      [this, self = shared_from_this()](const boost::system::error_code& ec, std::size_t n) {
-        if (closed_) return;
-        if (!ec) {
-          std::lock_guard lock(mutex_);
-          session_->onDatagram(std::span(datagram_buffer_.data(), n), monotonicSeconds());
-        }
-        // Errors such as ICMP port unreachable are transient on UDP: keep receiving.
-        readDatagram();
-      });
+  // Each socket's reads carry its generation: those of a replaced socket end quietly.
+  const std::uint64_t generation = ++udp_generation_;
+  auto on_datagram = [this, self = shared_from_this(), generation](
+                         const boost::system::error_code& ec, std::size_t n) {
+    if (closed_ || generation != udp_generation_) return;
+    if (!ec) {
+      std::lock_guard lock(mutex_);
+      const double now = monotonicSeconds();
+      session_->onDatagram(std::span(datagram_buffer_.data(), n), now);
+      noteLive(now);  // the handshake may just have finished
+    }
+    // Errors such as ICMP port unreachable are transient on UDP: keep receiving.
+    readDatagram();
+  };
+  udp_.async_receive(asio::buffer(datagram_buffer_), std::move(on_datagram));
 }
 
 void NetDriver::armTimer() {
@@ -327,10 +473,7 @@ void NetDriver::armTimer() {
       std::lock_guard lock(mutex_);
       const double now = monotonicSeconds();
       session_->update(now);
-      if (live_after_s_ < 0.0 && session_->state() == SessionState::kLive) {
-        live_after_s_ = now - started_at_;
-        backoff_.reset();
-      }
+      noteLive(now);
     }
     flush();
     armTimer();

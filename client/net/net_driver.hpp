@@ -11,6 +11,21 @@
 // connection after a JoinBackoff delay, with the same settings; the first refusal's
 // reason is logged at warn, later ones at debug. Meanwhile state() is kJoining. After
 // BackoffSettings::max_attempts refusals in a row the session stays closed.
+//
+// Reconnecting: once a session has been live, losing it (the connection drops, the
+// server shuts down or restarts, it goes silent, it drops us) is not the end: the driver
+// joins again on a new connection after a jittered, growing delay (JoinBackoff from
+// base_s, windows up to max_s, no attempt limit) with the same room, name and avatar,
+// resuming the lost member (Join.resume_*: the server replaces our stale member rather
+// than refusing the name), and logs "reconnecting in 1.3 s (attempt 3)" and "rejoined room
+// R as N". A refused join meanwhile is retried too when it may clear (busy, name or room
+// taken by our stale member). Refusals for good (protocol version, bad name, avatar
+// rejected) end it at once, and so does SessionSettings::reconnect_give_up_s passing
+// since the loss; then state() is kClosed and error() says why. Until then state() is
+// never kClosed. The session's stats carry over (reconnects counted there too).
+//
+// NAT rebinding is the session's business (ClientSession re-says hello when the
+// server's datagrams stop); reopenDatagramSocket() makes one happen on purpose.
 #pragma once
 
 #include <chrono>
@@ -61,24 +76,39 @@ class NetDriver : public std::enable_shared_from_this<NetDriver> {
   bool requestBall();
   SessionState state() const;
   std::string error() const;
+  // Why the last session closed (a refusal's text, a lost connection), kept across the
+  // fresh sessions of retries and reconnects; empty when none has closed.
+  std::string lastCloseReason() const;
   // Runs f(session, now) under the session lock (keep it short: the network waits).
   template <typename F>
   auto withSession(F&& f) const {
     std::lock_guard lock(mutex_);
     return f(static_cast<const ClientSession&>(*session_), monotonicSeconds());
   }
-  // Joins refused and tried again so far, and the seconds from start() to the first
-  // kLive (negative until then).
+  // Joins tried again so far (after a refusal or a lost session), the lost sessions
+  // resumed (live again), and the seconds from start() to the first kLive (negative until
+  // then).
   int rejoins() const;
+  int reconnects() const;
   double secondsToLive() const;
+
+  // Replaces the UDP socket with a fresh one (a new local port) toward the same server
+  // address: to the server this is a NAT rebinding. For tests and for a known change of
+  // the local network. Nothing happens when not connected.
+  void reopenDatagramSocket();
 
  private:
   NetDriver(asio::io_context& io, ServerAddress server, SessionSettings settings,
             std::shared_ptr<AvatarCache> cache, const BackoffSettings& backoff);
   // Resolves and connects (strand), then starts the session.
   void connect();
-  // The session closed: another join after a backoff when the refusal was transient.
+  // The TCP connection is up (strand): UDP opened toward the same endpoint, session started.
+  void onConnected(const asio::ip::tcp::endpoint& endpoint);
+  // The session closed: another join after a backoff when the refusal was transient or
+  // a live session was lost (and the give-up time has not passed); else the end.
   void maybeRejoin();
+  // Under the lock, each timer tick: notes the first kLive and a resumed one.
+  void noteLive(double now);
   // Under the lock: takes the session's outbox; then (strand) writes it out.
   void flush();
   void writeStream();
@@ -96,13 +126,21 @@ class NetDriver : public std::enable_shared_from_this<NetDriver> {
   asio::ip::udp::socket udp_;
   asio::steady_timer timer_;
 
-  mutable std::mutex mutex_;  // session_, rejoins_, live_after_s_
+  mutable std::mutex mutex_;  // the fields down to retry_timer_
   SessionSettings settings_;
   std::shared_ptr<AvatarCache> cache_;
   std::unique_ptr<ClientSession> session_;
   int rejoins_ = 0;
+  int reconnects_ = 0;
   double started_at_ = 0.0;
   double live_after_s_ = -1.0;
+  bool ever_live_ = false;              // some session of this driver reached kLive
+  bool session_live_ = false;           // the current one has (noted)
+  double lost_at_ = -1.0;               // when the live session was lost (< 0: not reconnecting)
+  bool ended_ = false;                  // closed for good: state() reports kClosed
+  std::uint32_t resume_member_id_ = 0;  // the newest Welcome's id and key
+  std::string last_close_reason_;       // see lastCloseReason()
+  std::uint64_t resume_key_ = 0;
 
   // Strand only.
   std::deque<std::vector<std::uint8_t>> write_queue_;
@@ -112,7 +150,10 @@ class NetDriver : public std::enable_shared_from_this<NetDriver> {
   bool connected_ = false;
   bool stopping_ = false;
   JoinBackoff backoff_;
+  JoinBackoff reconnect_backoff_;
   asio::steady_timer retry_timer_;
+  asio::ip::udp::endpoint udp_server_;  // where the UDP socket is connected
+  std::uint64_t udp_generation_ = 0;    // bumped per UDP socket (stale reads stop)
   std::vector<std::uint8_t> read_buffer_;
   std::vector<std::uint8_t> datagram_buffer_;
 };

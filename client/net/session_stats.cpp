@@ -66,6 +66,9 @@ std::string statsJson(const SessionStats& stats, int frames_rendered, double clo
   doc["snapshots_received"] = stats.snapshots_received;
   doc["datagram_bytes_received"] = stats.datagram_bytes_received;
   doc["datagrams_rejected"] = stats.datagrams_rejected;
+  doc["reconnects"] = stats.reconnects;
+  doc["udp_rehellos"] = stats.udp_rehellos;
+  doc["udp_rebinds"] = stats.udp_rebinds;
   doc["clock"] = {{"offset_s", clock_offset_s}, {"round_trip_ms", clock_round_trip_s * 1e3}};
   return doc.dump(2) + "\n";
 }

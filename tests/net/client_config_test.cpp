@@ -25,6 +25,21 @@ TEST(ClientConfig, EmbeddedDefaultsParse) {
   EXPECT_NE(unknown.error().message.find("nope"), std::string::npos);
 }
 
+TEST(ClientConfig, ReconnectSettings) {
+  auto defaults = parseClientConfig("", "c.toml");
+  ASSERT_TRUE(defaults) << defaults.error().message;
+  EXPECT_GT(defaults->session.reconnect_give_up_s, 60.0);
+  EXPECT_GT(defaults->session.rehello_after_s, 0.0);
+  auto c =
+      parseClientConfig("[network]\nreconnect_give_up_s = 0\nrehello_after_s = 1.5\n", "c.toml");
+  ASSERT_TRUE(c) << c.error().message;
+  EXPECT_DOUBLE_EQ(c->session.reconnect_give_up_s, 0.0);
+  EXPECT_DOUBLE_EQ(c->session.rehello_after_s, 1.5);
+  auto bad = parseClientConfig("[network]\nreconnect_give_up_s = -1\n", "c.toml");
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("reconnect_give_up_s"), std::string::npos);
+}
+
 TEST(ServerAddress, ParsesHostPortAndRefusesTheRest) {
   auto a = parseServerAddress("127.0.0.1:7400");
   ASSERT_TRUE(a);
@@ -58,6 +73,8 @@ TEST(SessionStats, JsonHasTheAgreedShape) {
   EXPECT_DOUBLE_EQ(doc["latency_ms"]["mean"].get<double>(), 50.5);
   EXPECT_NEAR(doc["latency_ms"]["p99"].get<double>(), 99.0, 0.05);
   EXPECT_EQ(doc["frames_rendered"], 7);
+  EXPECT_EQ(doc["reconnects"], 0);
+  EXPECT_EQ(doc["udp_rebinds"], 0);
 }
 
 }  // namespace
