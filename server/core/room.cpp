@@ -19,6 +19,8 @@ RoomSettings roomSettings(const ServerConfig& config) {
   s.world.extent_m = config.world_extent_m;
   s.world.max_parts = config.max_interaction_datagrams;
   s.world.send_self_contact = config.send_self_contact;
+  s.world.contact_window_s = static_cast<float>(config.contact_window_s);
+  s.world.contact_lead_s = static_cast<float>(config.contact_lead_s);
   s.world.spawn_height_m = config.spawn_height_m;
   return s;
 }

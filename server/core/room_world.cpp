@@ -36,6 +36,7 @@ void RoomWorld::prepareMember(MemberBody& m) {
   m.has_record = false;
   m.dirty = true;
   m.posed_once = false;
+  m.sweep.reset();
   if (!m.model) return;
   const auto n = static_cast<std::size_t>(m.model->skeleton.jointCount());
   m.posture = restPosture(m.model->skeleton);
@@ -132,6 +133,50 @@ void RoomWorld::poseProp(PropBody& p, int slot) {
   posePrimitives(p.set, std::span<const glm::mat4>(&placement, 1), p.posed[slot]);
 }
 
+// ---------------------------------------------------------------- motion margins
+
+void SweptBounds::update(double t, const PosedPrimitives& posed, float window, float lead,
+                         PosedPrimitives& swept) {
+  const std::size_t n = posed.items.size();
+  if (n != prims_) {
+    prims_ = n;
+    boxes_.assign(static_cast<std::size_t>(kCapacity) * n, Bounds{});
+    count_ = 0;
+    head_ = 0;
+  }
+  Bounds* const now = boxes_.data() + static_cast<std::size_t>(head_) * n;
+  for (std::size_t i = 0; i < n; ++i) now[i] = posed.items[i].bounds;
+  times_[static_cast<std::size_t>(head_)] = t;
+  const int newest = head_;
+  head_ = (head_ + 1) % kCapacity;
+  count_ = std::min(count_ + 1, kCapacity);
+  swept = posed;  // same sizes after the first tick: no allocation
+  swept.bounds = Bounds{glm::vec3(INFINITY), glm::vec3(-INFINITY)};
+  for (std::size_t i = 0; i < n; ++i) {
+    // The farthest a corner moved within the window, and over what span.
+    float moved = 0.0f;
+    double span = 0.0;
+    for (int k = 1; k < count_; ++k) {
+      const int slot = (newest - k + kCapacity) % kCapacity;
+      const double age = t - times_[static_cast<std::size_t>(slot)];
+      if (age > static_cast<double>(window) + 1e-9) break;
+      const Bounds& then = boxes_[static_cast<std::size_t>(slot) * n + i];
+      moved =
+          std::max({moved, glm::length(now[i].min - then.min), glm::length(now[i].max - then.max)});
+      span = age;
+    }
+    const float speed = span > 0.0 ? moved / static_cast<float>(span) : 0.0f;
+    const float margin = moved + speed * lead;
+    PosedPrimitive& q = swept.items[i];
+    q.reach += margin;
+    q.bounds.min -= glm::vec3(margin);
+    q.bounds.max += glm::vec3(margin);
+    swept.bounds.min = glm::min(swept.bounds.min, q.bounds.min);
+    swept.bounds.max = glm::max(swept.bounds.max, q.bounds.max);
+  }
+  if (n == 0) swept.bounds = posed.bounds;
+}
+
 // ---------------------------------------------------------------- the tick
 
 void RoomWorld::step(double dt_in) {
@@ -183,8 +228,21 @@ void RoomWorld::step(double dt_in) {
   }
   for (PropBody& p : props_) poseProp(p, slot_);
 
-  // 3. Step 1 across and within bodies.
-  buildInteractions(views_, scratch_, list_, settings_.send_self_contact);
+  // 3. Step 1 across and within bodies, over the primitives swollen by their motion.
+  time_ += dt;
+  swept_views_.clear();
+  const float window = std::max(settings_.contact_window_s, 0.0f);
+  const float lead = std::max(settings_.contact_lead_s, 0.0f);
+  for (MemberBody& m : members_) {
+    if (!m.model || !m.model->collides) continue;
+    m.sweep.update(time_, m.posed[slot_], window, lead, m.swept);
+    swept_views_.push_back({&m.model->graph, &m.swept});
+  }
+  for (PropBody& p : props_) {
+    p.sweep.update(time_, p.posed[slot_], window, lead, p.swept);
+    swept_views_.push_back({nullptr, &p.swept});
+  }
+  buildInteractions(swept_views_, scratch_, list_, settings_.send_self_contact);
 
   // 4. The snapshot's world parts.
   prop_records_.clear();

@@ -5,6 +5,10 @@
 //   2. step every ball by the fields' reaction of everything else (stepBall: gravity,
 //      floor, restitution; the surfaces' velocities from the previous tick's poses),
 //   3. Step 1 across bodies, and within them when send_self_contact (buildInteractions),
+//      over each primitive swollen by how far it moved in the last contact_window_s and
+//      will move in the next contact_lead_s (a client draws remote members behind the
+//      server's newest postures and its own ahead: the list must hold the pairs that touch
+//      in what it draws, see SweptBounds),
 //   4. serialize the snapshot's world parts once for every recipient: the prop states and
 //      the interaction list, split over at most max_parts datagrams (pairs between bodies
 //      first; self-contact pairs are dropped first when the list does not fit, and the
@@ -16,6 +20,7 @@
 // were added), then props (in the order they were spawned).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -45,6 +50,34 @@ struct WorldSettings {
                                    // compute them; the world's list has none)
   float spawn_height_m = 0.6f;     // spawnPointAbove: this far above the head joint
   float spawn_forward_m = 0.03f;   // ... and this far in front of it (so it rolls off)
+  float contact_window_s = 0.15f;  // Step 1 covers where each primitive was this far back
+                                   // (clients draw remote members a playback delay behind,
+                                   // 0.1 s by default, plus a tick or two); 0: newest only
+  float contact_lead_s = 0.05f;    // ... and where its recent motion takes it this far ahead
+                                   // (a client draws its own avatar ahead of the server)
+};
+
+// The motion margins of one body's primitives: a ring of their boxes over the last ticks
+// (at most kCapacity), and from it how far each primitive moved. Allocation-free once
+// sized for the body's primitives.
+class SweptBounds {
+ public:
+  static constexpr int kCapacity = 32;  // ticks remembered (0.53 s at 60 Hz)
+
+  // Records this tick's boxes (at time t, seconds) and writes into `swept` a copy of
+  // `posed` whose every primitive's reach and box grow by its margin: the farthest any
+  // corner of its box moved between t - window and t, plus that motion's mean speed times
+  // lead. A body whose primitive count changed starts over (margins 0).
+  void update(double t, const PosedPrimitives& posed, float window, float lead,
+              PosedPrimitives& swept);
+  void reset() { count_ = 0; }
+
+ private:
+  std::vector<Bounds> boxes_;  // kCapacity x nprim
+  std::array<double, kCapacity> times_{};
+  int head_ = 0;  // next slot
+  int count_ = 0;
+  std::size_t prims_ = 0;
 };
 
 // One body of the world as the wire names it.
@@ -110,6 +143,8 @@ class RoomWorld {
     std::vector<glm::mat4> skin;         // (njoint) bind -> room
     PosedPrimitives posed[2];
     bool posed_once = false;
+    SweptBounds sweep;      // Step 1's motion margins
+    PosedPrimitives swept;  // posed[slot_] swollen by them
   };
   struct PropBody {
     PropId id;
@@ -120,6 +155,8 @@ class RoomWorld {
     glm::vec3 start_velocity{0.0f};
     PosedPrimitives posed[2];
     bool posed_once = false;
+    SweptBounds sweep;
+    PosedPrimitives swept;
   };
 
   MemberBody* findMember(MemberId id);
@@ -139,6 +176,8 @@ class RoomWorld {
   std::vector<WorldBody> bodies_;
   std::vector<BodyView> views_;
   std::vector<BodyView> previous_views_;
+  std::vector<BodyView> swept_views_;  // Step 1's bodies (see SweptBounds)
+  double time_ = 0.0;                  // sum of the steps' dt
   InteractionScratch scratch_;
   InteractionList list_;
   std::vector<std::uint32_t> order_;       // pair indices: between bodies, then self-contact

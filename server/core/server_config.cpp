@@ -168,6 +168,8 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
   VISTEL_TRY(world.number("extent_m", c.world_extent_m, 1, 30));
   VISTEL_TRY(world.number("max_interaction_datagrams", c.max_interaction_datagrams, 1, 32));
   VISTEL_TRY(world.boolean("send_self_contact", c.send_self_contact));
+  VISTEL_TRY(world.number("contact_window_s", c.contact_window_s, 0, 0.5));
+  VISTEL_TRY(world.number("contact_lead_s", c.contact_lead_s, 0, 0.5));
   VISTEL_TRY(world.checkUnknown());
 
   ConfigTable props(root, "props", source_name);

@@ -82,6 +82,8 @@ struct ServerConfig {
                                       // prop states travel in millimetres, WIRE.md §3.7)
   int max_interaction_datagrams = 4;  // per tick and member; more pairs are truncated
   bool send_self_contact = false;     // also send self-contact pairs (clients compute them)
+  double contact_window_s = 0.15;     // Step 1 covers each body's motion this far back
+  double contact_lead_s = 0.05;       // ... and this far ahead (see WorldSettings)
   // [props]
   int max_props_per_room = 8;     // a spawn beyond removes the oldest client-spawned prop
   double spawn_interval_s = 2.0;  // a member spawns at most one prop per this
