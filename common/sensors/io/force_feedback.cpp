@@ -7,14 +7,10 @@
 
 #include <hidapi.h>
 
+#include "common/sensors/io/hid_text.hpp"
+
 namespace vistel {
 namespace {
-
-std::string narrow(const wchar_t* w) {
-  std::string out;
-  for (; w != nullptr && *w != 0; ++w) out.push_back(*w < 128 ? static_cast<char>(*w) : '?');
-  return out;
-}
 
 class HidapiOutput final : public HidOutputDevice {
  public:
@@ -26,7 +22,7 @@ class HidapiOutput final : public HidOutputDevice {
   int write(std::span<const std::uint8_t> report) override {
     return hid_write(dev_, report.data(), report.size());
   }
-  std::string lastError() const override { return narrow(hid_error(dev_)); }
+  std::string lastError() const override { return hidText(hid_error(dev_)); }
   std::string describe() const override { return name_; }
 
  private:
@@ -80,7 +76,7 @@ Result<std::unique_ptr<HidOutputDevice>> openHidapiOutput(const ForceFeedbackCon
   hid_device* dev = hid_open(config.vendor_id, config.product_id,
                              config.serial.empty() ? nullptr : serial.c_str());
   if (dev == nullptr) {
-    const std::string why = narrow(hid_error(nullptr));
+    const std::string why = hidText(hid_error(nullptr));
     hid_exit();
     return fail("{}: cannot open ({})", name,
                 why.empty() ? "no such device, or no permission" : why);

@@ -7,6 +7,8 @@
 
 #include <hidapi.h>
 
+#include "common/sensors/io/hid_text.hpp"
+
 namespace vistel {
 namespace {
 
@@ -33,12 +35,6 @@ float readValue(std::span<const std::uint8_t> r, int offset, HidValueType type) 
   return 0.0f;
 }
 
-std::string narrow(const wchar_t* w) {
-  std::string out;
-  for (; w != nullptr && *w != 0; ++w) out.push_back(*w < 128 ? static_cast<char>(*w) : '?');
-  return out;
-}
-
 class HidapiDevice final : public HidDevice {
  public:
   HidapiDevice(hid_device* dev, std::string name) : dev_(dev), name_(std::move(name)) {}
@@ -49,7 +45,7 @@ class HidapiDevice final : public HidDevice {
   int read(std::uint8_t* data, std::size_t length, int timeout_ms) override {
     return hid_read_timeout(dev_, data, length, timeout_ms);
   }
-  std::string lastError() const override { return narrow(hid_error(dev_)); }
+  std::string lastError() const override { return hidText(hid_error(dev_)); }
   std::string describe() const override { return name_; }
 
  private:
@@ -66,7 +62,7 @@ Result<std::unique_ptr<HidDevice>> openHidapiDevice(const HidConfig& config) {
   hid_device* dev = hid_open(config.vendor_id, config.product_id,
                              config.serial.empty() ? nullptr : serial.c_str());
   if (dev == nullptr) {
-    const std::string why = narrow(hid_error(nullptr));
+    const std::string why = hidText(hid_error(nullptr));
     hid_exit();
     return fail("{}: cannot open ({})", name,
                 why.empty() ? "no such device, or no permission" : why);
