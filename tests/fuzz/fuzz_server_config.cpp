@@ -36,10 +36,15 @@ std::vector<fuzz::Seed> makeSeeds() {
       "max_frame_bytes = 65536\nmax_avatar_bytes = 1048576\navatar_chunk_bytes = 4096\n"
       "upload_stall_timeout_s = 3.0\ncontrol_rate_hz = 50\ncontrol_burst = 20\n"
       "max_primitives_per_avatar = 32\nmax_primitive_extent_m = 1.5\n"
+      "upload_min_rate_bytes_per_s = 1024\nupload_rate_window_s = 2\nupload_grace_s = 1\n"
+      "upload_deadline_base_s = 10\nupload_deadline_rate_bytes_per_s = 4096\n"
+      "max_connections = 100\nmax_connections_per_address = 4\nmax_rooms_per_address = 2\n"
+      "limit_loopback = true\n"
       "[room]\nseat_radius_m = 2.0\nseat_spacing_m = 1.0\nring_gap_m = 1.5\n"
       "near_members = 8\nfar_rate_divisor = 2\n"
       "[world]\ngravity_mps2 = 9.0\nfloor_height_m = 0.0\nextent_m = 10\n"
       "max_interaction_datagrams = 2\nsend_self_contact = true\n"
+      "contact_window_s = 0.2\ncontact_lead_s = 0.0\n"
       "[props]\nmax_per_room = 4\nspawn_interval_s = 1.0\nspawn_height_m = 0.5\n"
       "[log]\nlevel = \"warn\"\n"
       "[[prop]]\nposition = [0.0, 1.0, 0.5]\nradius = 0.2\nmass = 1.5\n"
@@ -96,7 +101,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         "[room] values in range");
   check(within(c.gravity_mps2, 0, 100) && within(c.floor_height_m, -2, 2) &&
             within(c.world_extent_m, 1, 30) && c.max_interaction_datagrams >= 1 &&
-            c.max_interaction_datagrams <= 32,
+            c.max_interaction_datagrams <= 32 && within(c.contact_window_s, 0, 0.5) &&
+            within(c.contact_lead_s, 0, 0.5),
         "[world] values in range");
   check(c.max_props_per_room >= 0 && c.max_props_per_room <= 32 &&
             within(c.spawn_interval_s, 0, 3600) && within(c.spawn_height_m, 0, 10),
