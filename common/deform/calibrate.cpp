@@ -138,7 +138,7 @@ void fitSkinWeights(ImplicitModel& model, std::span<const glm::vec3> pos, int sa
 
 Result<CalibrationReport> calibrateModel(ImplicitModel& model, std::span<const glm::vec3> pos,
                                          std::span<const glm::vec3> nrm,
-                                         const CalibrationOptions& opt) {
+                                         const FieldCalibrationOptions& opt) {
   Calibration& c = model.calibration;
   const PrimitiveSet& set = model.primitives;
   const std::size_t nv = pos.size();

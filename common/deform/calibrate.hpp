@@ -16,7 +16,7 @@
 
 namespace vistel {
 
-struct CalibrationOptions {
+struct FieldCalibrationOptions {
   float rest_margin = 0.1f;     // pairs within T * rest_margin of touching at rest get a
                                 // threshold of (their rest value + T * rest_margin)
   float always_margin = 0.02f;  // same for a joint vertex's opposite limb
@@ -39,7 +39,7 @@ struct CalibrationReport {
 Result<CalibrationReport> calibrateModel(ImplicitModel& model,
                                          std::span<const glm::vec3> rest_positions,
                                          std::span<const glm::vec3> rest_normals,
-                                         const CalibrationOptions& options = {});
+                                         const FieldCalibrationOptions& options = {});
 
 // Fits every primitive's skin weight grid (Primitive::skin_weight) to the weights w_v of
 // the vertices it defines (limb and joint vertices with p0 = it): samples^3 values over its

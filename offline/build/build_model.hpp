@@ -19,7 +19,7 @@
 namespace vistel {
 
 struct BuildOptions {
-  CalibrationOptions calibration;
+  FieldCalibrationOptions calibration;
   // Called with the fraction done (0..1) and the stage's name; may be empty.
   std::function<void(float, std::string_view)> progress;
 };

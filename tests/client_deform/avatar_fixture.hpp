@@ -1,7 +1,5 @@
 // The project's default avatar with its implicit model, built from
-// config/avatars/humanoid.toml once per process (about a second in Release). In its own
-// translation unit: the offline builder's headers and the sensors' cannot share one (both
-// declare a vistel::CalibrationOptions).
+// config/avatars/humanoid.toml once per process (about a second in Release).
 #pragma once
 
 #include <memory>
