@@ -29,7 +29,7 @@ std::vector<fuzz::Seed> makeSeeds() {
   }
   seeds.push_back(fuzz::textSeed(
       "gen_most_keys.toml",
-      "[network]\nbind = \"0.0.0.0\"\nport = 0\nio_threads = 3\n"
+      "[network]\nbind = \"127.0.0.1\"\nport = 0\nio_threads = 3\n"
       "[session]\ntick_rate_hz = 30\nmember_timeout_s = 5.0\njoin_timeout_s = 2.5\n"
       "forward_interval_s = 0.001\nstats_interval_s = 0\n"
       "[limits]\nmax_rooms = 4\nmax_members = 40\nmax_members_per_room = 10\n"

@@ -13,11 +13,11 @@ namespace {
 
 TEST(ConnectionLimits, RefusesPastThePerAddressAndTotalLimits) {
   ConnectionLimits limits(4, 2, false);
-  EXPECT_EQ(limits.admit("203.0.113.1", false), "");
-  EXPECT_EQ(limits.admit("203.0.113.1", false), "");
-  EXPECT_EQ(limits.admit("203.0.113.1", false), "connections per address");
-  EXPECT_EQ(limits.admit("203.0.113.2", false), "");
-  EXPECT_EQ(limits.openFrom("203.0.113.1"), 2);
+  EXPECT_EQ(limits.admit("127.0.0.4", false), "");
+  EXPECT_EQ(limits.admit("127.0.0.4", false), "");
+  EXPECT_EQ(limits.admit("127.0.0.4", false), "connections per address");
+  EXPECT_EQ(limits.admit("127.0.0.5", false), "");
+  EXPECT_EQ(limits.openFrom("127.0.0.4"), 2);
   // Loopback is exempt from the per-address limit, not from the total.
   EXPECT_EQ(limits.admit("127.0.0.1", true), "");
   EXPECT_EQ(limits.admit("127.0.0.1", true), "connection limit");
@@ -25,15 +25,15 @@ TEST(ConnectionLimits, RefusesPastThePerAddressAndTotalLimits) {
   EXPECT_EQ(limits.refusals().at("connections per address"), 1u);
   EXPECT_EQ(limits.refusals().at("connection limit"), 1u);
   // A closed connection frees its slot; releasing an unknown address changes nothing.
-  limits.release("203.0.113.1");
-  limits.release("198.51.100.9");
+  limits.release("127.0.0.4");
+  limits.release("127.0.0.9");
   EXPECT_EQ(limits.open(), 3);
-  EXPECT_EQ(limits.admit("203.0.113.1", false), "");
+  EXPECT_EQ(limits.admit("127.0.0.4", false), "");
 }
 
 TEST(ConnectionLimits, ZeroMeansNoLimitAndLoopbackCanBeLimited) {
   ConnectionLimits none(0, 0, false);
-  for (int i = 0; i < 100; ++i) EXPECT_EQ(none.admit("203.0.113.1", false), "");
+  for (int i = 0; i < 100; ++i) EXPECT_EQ(none.admit("127.0.0.4", false), "");
   ConnectionLimits strict(0, 1, true);
   EXPECT_EQ(strict.admit("127.0.0.1", true), "");
   EXPECT_EQ(strict.admit("127.0.0.1", true), "connections per address");

@@ -135,23 +135,23 @@ TEST(RoomsPerAddress, OneAddressOpensAtMostTheLimit) {
                                                         2000, kProtocolVersion)),
                         0.0, fx);
   };
-  join(1, "198.51.100.1", "one");
-  join(2, "198.51.100.1", "two");
+  join(1, "127.0.0.2", "one");
+  join(2, "127.0.0.2", "two");
   EXPECT_EQ(lobby.roomCount(), 2);
   // A third room from the same address is refused; joining an open room is not.
-  join(3, "198.51.100.1", "three");
+  join(3, "127.0.0.2", "three");
   EXPECT_EQ(lobby.roomCount(), 2);
   EXPECT_EQ(lobby.drops().count("rooms per address"), 1u);
-  join(4, "198.51.100.1", "one");
+  join(4, "127.0.0.2", "one");
   EXPECT_EQ(lobby.memberCount(), 3);
   // Another address may; an unlimited (unset) one too.
-  join(5, "198.51.100.2", "four");
+  join(5, "127.0.0.3", "four");
   join(6, "", "five");
   EXPECT_EQ(lobby.roomCount(), 4);
   // A room that closes gives its creator's count back.
   lobby.onDisconnect(2, 1.0, fx);
   EXPECT_EQ(lobby.roomCount(), 3);
-  join(7, "198.51.100.1", "six");
+  join(7, "127.0.0.2", "six");
   EXPECT_EQ(lobby.roomCount(), 4);
   EXPECT_EQ(lobby.drops().count("rooms per address"), 1u);
 }
