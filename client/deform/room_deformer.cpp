@@ -116,15 +116,11 @@ RoomDeformer::~RoomDeformer() {
 }
 
 Status RoomDeformer::rebuild(std::span<const MemberView> views, RoomView& view) {
-  // What the bodies that stay carry over (elastic memory: dents shared across rebuilds).
-  std::vector<std::pair<Key, DeformState>> carried;
-  if (shared_->scene) {
-    for (std::size_t i = 0; i < keys_.size(); ++i) {
-      if (const DeformState* st = shared_->scene->deformState(static_cast<int>(i)))
-        carried.emplace_back(keys_[i], *st);
-    }
-  }
-  for (const Key& k : keys_) view.setDeformer(k.id, nullptr);
+  // The scene being replaced: the bodies that stay carry their state over from it (elastic
+  // memory: dents survive rebuilds).
+  std::optional<DeformScene> old_scene = std::move(shared_->scene);
+  const std::vector<Key> old_keys = std::move(keys_);
+  for (const Key& k : old_keys) view.setDeformer(k.id, nullptr);
   keys_.clear();
   hooks_.clear();
   shared_->scene.reset();
@@ -168,10 +164,11 @@ Status RoomDeformer::rebuild(std::span<const MemberView> views, RoomView& view) 
   tiers_.assign(nbody, DeformTier::kFull);
   previous_tiers_.reserve(nbody);
   keys_ = wanted_;
-  for (const auto& [key, state] : carried) {
-    const auto found = std::find(keys_.begin(), keys_.end(), key);
-    if (found != keys_.end())
-      shared_->scene->carryState(static_cast<int>(found - keys_.begin()), state);
+  for (std::size_t i = 0; old_scene && i < old_keys.size(); ++i) {
+    const DeformState* state = old_scene->deformState(static_cast<int>(i));
+    const auto found = std::find(keys_.begin(), keys_.end(), old_keys[i]);
+    if (state != nullptr && found != keys_.end())
+      shared_->scene->carryState(static_cast<int>(found - keys_.begin()), *state);
   }
   for (std::size_t i = 0; i < keys_.size(); ++i) {
     hooks_.push_back(std::make_shared<Hook>(shared_, static_cast<int>(i)));

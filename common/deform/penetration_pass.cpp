@@ -100,6 +100,23 @@ struct Listed {
   float lowest;       // lowestTerm
 };
 
+// One vertex's own collider list (listColliders for its defining primitives and its
+// always-pairs at its rigid position): the count, at most kMaxListed (when more are near it,
+// the first ones).
+int listVertexColliders(const DeformFrame& fr, std::uint32_t v, std::uint16_t (&out)[kMaxListed]) {
+  const Calibration& cal = fr.model->calibration;
+  const auto& pr = cal.prims[v];
+  std::int16_t own_always[kMaxListed];
+  std::size_t na = 0;
+  for (std::uint32_t k = cal.pair_offsets[v]; k < cal.pair_offsets[v + 1] && na < kMaxListed; ++k) {
+    if ((cal.pairs[k].flags & kPairAlways) != 0) own_always[na++] = cal.pairs[k].prim;
+  }
+  const glm::vec3 p = fr.in->rigid_positions[v];
+  const int n =
+      listColliders(fr, {pr[0], pr[1], pr[2], pr[3]}, {own_always, na}, Bounds{p, p}, out);
+  return n < 0 ? kMaxListed : n;
+}
+
 // Describes `n` entries of a collider list for vertices with defining primitives key[0..2].
 void describeList(const DeformFrame& fr, const std::array<std::int16_t, 4>& key,
                   const std::uint16_t* entries, int n, Listed* out) {
@@ -528,17 +545,8 @@ void passPenetration(DeformFrame& fr, int first, int last) {
     for (std::uint32_t i = b; i < e; ++i) {
       const std::uint32_t v = sc.order[i];
       // The patch's list overflowed: list the vertex's own.
-      const auto& pr = cal.prims[v];
-      std::int16_t own_always[kMaxListed];
-      std::size_t na = 0;
-      for (std::uint32_t k = cal.pair_offsets[v]; k < cal.pair_offsets[v + 1] && na < kMaxListed;
-           ++k) {
-        if ((cal.pairs[k].flags & kPairAlways) != 0) own_always[na++] = cal.pairs[k].prim;
-      }
-      int nv = listColliders(fr, {pr[0], pr[1], pr[2], pr[3]}, {own_always, na},
-                             Bounds{pos[v], pos[v]}, list);
-      if (nv < 0) nv = kMaxListed;  // more near one vertex than a list holds: the first ones
-      describeList(fr, pr, list, nv, described);
+      const int nv = listVertexColliders(fr, v, list);
+      describeList(fr, cal.prims[v], list, nv, described);
       pts.count = 1;
       point(0, v);
       findCandidates(fr, pts, {described, static_cast<std::size_t>(nv)});
@@ -549,22 +557,12 @@ void passPenetration(DeformFrame& fr, int first, int last) {
 
 void passPenetrationReference(DeformFrame& fr, int first, int last) {
   const Calibration& cal = fr.model->calibration;
-  const auto pos = fr.in->rigid_positions;
   std::uint16_t list[kMaxListed];
   Listed described[kMaxListed];
   for (int vv = first; vv < last; ++vv) {
     const auto v = static_cast<std::uint32_t>(vv);
-    const auto& pr = cal.prims[v];
-    std::int16_t own_always[kMaxListed];
-    std::size_t na = 0;
-    for (std::uint32_t k = cal.pair_offsets[v]; k < cal.pair_offsets[v + 1] && na < kMaxListed;
-         ++k) {
-      if ((cal.pairs[k].flags & kPairAlways) != 0) own_always[na++] = cal.pairs[k].prim;
-    }
-    int n = listColliders(fr, {pr[0], pr[1], pr[2], pr[3]}, {own_always, na},
-                          Bounds{pos[v], pos[v]}, list);
-    if (n < 0) n = kMaxListed;  // more near one vertex than a list holds: the first ones
-    describeList(fr, pr, list, n, described);
+    const int n = listVertexColliders(fr, v, list);
+    describeList(fr, cal.prims[v], list, n, described);
     referenceCandidates(fr, v, {described, static_cast<std::size_t>(n)});
     if (n == kMaxListed) fr.sc->cand_count[v] |= 0x80;
   }

@@ -330,6 +330,7 @@ Status runDeform(const DeformCommandOptions& opt) {
   int contact_frames = 0;
   double max_force = 0.0, max_area = 0.0;
   const double t0 = first * frame_time;
+  std::vector<glm::vec3> dynamics_on(static_cast<std::size_t>(nbody));  // per frame: N
   auto last_progress = std::chrono::steady_clock::now();
   for (int k = 0; k < frame_count; ++k) {
     if (!opt.quiet && k > 0 &&
@@ -363,7 +364,7 @@ Status runDeform(const DeformCommandOptions& opt) {
 
     // The ball's next position under its dynamics (gravity, floor, the avatar's primitives),
     // from the configuration of this frame: the forces they put on each body.
-    std::vector<glm::vec3> dynamics_on(static_cast<std::size_t>(nbody), glm::vec3(0.0f));
+    std::fill(dynamics_on.begin(), dynamics_on.end(), glm::vec3(0.0f));
     if (ball_args && opt.ball_physics) {
       const BallStepReport report =
           stepBall(ball_state, scene.bodyViews(), static_cast<float>(gltf.frame_time), ball_step);

@@ -24,8 +24,8 @@
 #include "client/view/room_view.hpp"
 #include "common/base/file.hpp"
 #include "common/scene/deform_scene.hpp"
-#include "tests/client_deform/avatar_fixture.hpp"
 #include "tests/support/alloc_counter.hpp"
+#include "tests/support/default_avatar.hpp"
 #include "tests/support/test_support.hpp"
 
 namespace vistel {

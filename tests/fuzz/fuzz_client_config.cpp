@@ -21,6 +21,7 @@ namespace {
 
 using namespace vistel;
 using fuzz::check;
+using fuzz::within;
 
 std::vector<fuzz::Seed> makeSeeds() {
   std::vector<fuzz::Seed> seeds;
@@ -48,8 +49,6 @@ std::vector<fuzz::Seed> makeSeeds() {
   return seeds;
 }
 
-bool within(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
-
 }  // namespace
 
 extern "C" int LLVMFuzzerInitialize(int* argc, char*** argv) {
@@ -61,11 +60,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   const Result<net::ClientConfig> config = net::parseClientConfig(text, "fuzz.toml");
   if (!config.ok()) {
-    // VISTEL_FUZZ_TRACE=1: say why (to check a corpus file or follow a finding).
-    if (std::getenv("VISTEL_FUZZ_TRACE") != nullptr) {
-      std::fprintf(stderr, "rejected: %s\n", config.error().message.c_str());
-    }
-    check(config.error().message.starts_with("fuzz.toml"), "a rejection names the source");
+    fuzz::checkRejection(config.error().message);
     return 0;
   }
   const net::SessionSettings& s = config->session;

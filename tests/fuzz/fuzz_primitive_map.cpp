@@ -104,11 +104,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   const Result<PrimitiveMapSpec> map = parsePrimitiveMap(text, "fuzz.toml");
   if (!map.ok()) {
-    // VISTEL_FUZZ_TRACE=1: say why (to check a corpus file or follow a finding).
-    if (std::getenv("VISTEL_FUZZ_TRACE") != nullptr) {
-      std::fprintf(stderr, "rejected: %s\n", map.error().message.c_str());
-    }
-    check(map.error().message.starts_with("fuzz.toml"), "a rejection names the source");
+    fuzz::checkRejection(map.error().message);
     return 0;
   }
 

@@ -21,6 +21,7 @@ namespace {
 
 using namespace vistel;
 using fuzz::check;
+using fuzz::within;
 
 std::vector<fuzz::Seed> makeSeeds() {
   std::vector<fuzz::Seed> seeds;
@@ -57,8 +58,6 @@ std::vector<fuzz::Seed> makeSeeds() {
   return seeds;
 }
 
-bool within(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
-
 bool finite(const glm::vec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
@@ -74,11 +73,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   const Result<server::ServerConfig> config = server::parseServerConfig(text, "fuzz.toml");
   if (!config.ok()) {
-    // VISTEL_FUZZ_TRACE=1: say why (to check a corpus file or follow a finding).
-    if (std::getenv("VISTEL_FUZZ_TRACE") != nullptr) {
-      std::fprintf(stderr, "rejected: %s\n", config.error().message.c_str());
-    }
-    check(config.error().message.starts_with("fuzz.toml"), "a rejection names the source");
+    fuzz::checkRejection(config.error().message);
     return 0;
   }
   const server::ServerConfig& c = *config;

@@ -15,6 +15,7 @@
 //   that repairs most mutants' checksums, so mutations reach the decoders behind them.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -39,6 +40,19 @@ inline void check(bool condition, const char* what) {
   if (condition) return;
   std::fprintf(stderr, "fuzz property violated: %s\n", what);
   std::abort();
+}
+
+// A parser's rejection of the input: its message must name the source ("fuzz.toml"); with
+// VISTEL_FUZZ_TRACE set it is printed (to check a corpus file or follow a finding).
+inline void checkRejection(const std::string& message) {
+  if (std::getenv("VISTEL_FUZZ_TRACE") != nullptr)
+    std::fprintf(stderr, "rejected: %s\n", message.c_str());
+  check(message.starts_with("fuzz.toml"), "a rejection names the source");
+}
+
+// A finite value within [lo, hi].
+inline bool within(double v, double lo, double hi) {
+  return std::isfinite(v) && v >= lo && v <= hi;
 }
 
 // ---- seeds -----------------------------------------------------------------------------

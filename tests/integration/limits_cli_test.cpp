@@ -17,6 +17,7 @@
 #include "common/wire/packets.hpp"
 #include "tests/integration/program.hpp"
 #include "tests/integration/raw_control.hpp"
+#include "tests/integration/session_scratch.hpp"
 #include "tests/net/synthetic_avatar.hpp"
 #include "tests/support/test_support.hpp"
 #include "vistel_version.hpp"
@@ -160,20 +161,7 @@ TEST(LimitsCli, ConnectionsPastThePerAddressLimitAreRefusedAtAcceptAndCounted) {
   ::close(second);
 }
 
-class RefusedPrograms : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = test::scratchDir();
-    avatar_path_ = dir_ + "/synthetic.vavatar";
-    ASSERT_TRUE(saveAvatar(test::makeSyntheticAvatar(), avatar_path_));
-    bvh_path_ = dir_ + "/wave.bvh";
-    ASSERT_TRUE(writeFileText(bvh_path_, test::syntheticBvh(60, 30.0)));
-    setenv("XDG_CACHE_HOME", (dir_ + "/cache").c_str(), 1);
-  }
-  std::string dir_;
-  std::string avatar_path_;
-  std::string bvh_path_;
-};
+class RefusedPrograms : public test::SessionScratch {};
 
 TEST_F(RefusedPrograms, ABotAndAClientRefusedUntilTheEndExitNonZeroSayingWhy) {
   // A server that takes one connection, held by a raw peer that never joins.

@@ -18,6 +18,7 @@
 #include "common/avatar/avatar_io.hpp"
 #include "common/base/file.hpp"
 #include "tests/integration/program.hpp"
+#include "tests/integration/session_scratch.hpp"
 #include "tests/net/synthetic_avatar.hpp"
 #include "tests/support/test_support.hpp"
 
@@ -31,21 +32,7 @@ std::string logOf(const std::string& path) {
   return text ? *text : std::string("(no log)");
 }
 
-class Loopback : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = test::scratchDir();
-    avatar_path_ = dir_ + "/synthetic.vavatar";
-    ASSERT_TRUE(saveAvatar(test::makeSyntheticAvatar(), avatar_path_));
-    bvh_path_ = dir_ + "/wave.bvh";
-    ASSERT_TRUE(writeFileText(bvh_path_, test::syntheticBvh(60, 30.0)));
-    // Fetched avatars go to a cache inside the scratch folder.
-    setenv("XDG_CACHE_HOME", (dir_ + "/cache").c_str(), 1);
-  }
-  std::string dir_;
-  std::string avatar_path_;
-  std::string bvh_path_;
-};
+class Loopback : public test::SessionScratch {};
 
 TEST_F(Loopback, ServerTwoBotsAndAHeadlessClient) {
   Child server("vistel-server", {"--port", "0"}, dir_ + "/server.log", true);

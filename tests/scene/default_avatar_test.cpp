@@ -6,40 +6,13 @@
 #include <gtest/gtest.h>
 
 #include "common/base/hash.hpp"
-#include "common/motion/joint_map.hpp"
-#include "offline/build/build_model.hpp"
-#include "offline/synth/default_avatar.hpp"
 #include "tests/scene/scene_fixtures.hpp"
+#include "tests/support/default_avatar.hpp"
 
 namespace vistel {
 namespace {
 
-// Built once per process (about a second).
-std::shared_ptr<const AvatarModel> defaultAvatar() {
-  static const std::shared_ptr<const AvatarModel> avatar = []() -> std::shared_ptr<AvatarModel> {
-    Result<AvatarModel> made = makeDefaultAvatar();
-    if (!made) {
-      ADD_FAILURE() << made.error().message;
-      return nullptr;
-    }
-    auto a = std::make_shared<AvatarModel>(std::move(*made));
-    Result<std::vector<JointMap>> maps = loadJointMaps();
-    Result<PrimitiveMapSpec> spec = loadPrimitiveMap();
-    if (!maps || !spec) {
-      ADD_FAILURE() << "config: " << (!maps ? maps.error().message : spec.error().message);
-      return nullptr;
-    }
-    Result<const JointMap*> map = selectJointMap(*maps, a->skeleton);
-    Result<ImplicitModel> model = buildImplicitModel(*a, *spec, map.ok() ? *map : nullptr);
-    if (!model) {
-      ADD_FAILURE() << model.error().message;
-      return nullptr;
-    }
-    a->implicit = std::move(*model);
-    return a;
-  }();
-  return avatar;
-}
+std::shared_ptr<const AvatarModel> defaultAvatar() { return test::defaultAvatarWithModel(); }
 
 // A ball of radius r touching the front of the chest, `depth` metres deep.
 glm::vec3 chestBall(const AvatarModel& a, float r, float depth) {

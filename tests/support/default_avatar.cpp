@@ -1,4 +1,4 @@
-#include "tests/client_deform/avatar_fixture.hpp"
+#include "tests/support/default_avatar.hpp"
 
 #include <gtest/gtest.h>
 
