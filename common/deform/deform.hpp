@@ -85,6 +85,20 @@ struct DeformOptions {
                                       // at least this fraction of its value at the start of
                                       // the projection (at most T); else the vertex is held
                                       // rigid (0: off)
+  float own_fade_low = 0.999f;        // the own field's surface fades into the skinned one
+  float own_fade_high = 0.999f;       // where the skinning does not follow the bones the
+                                      // vertex's own field models (Calibration::own_weight:
+                                      // its own primitives' bones and a limb's partner across
+                                      // a joint primitive): a vertex they carry with this low
+                                      // share of its skin weight or less keeps its skinned
+                                      // position as its own surface (w_v D_v is solved for
+                                      // its value there; contacts still move it), one with
+                                      // the high share or more is drawn to the field's
+                                      // (w_v D_v = T), and between the two a linear blend
+                                      // (the target shifts by the skinned position's excess
+                                      // times the faded share). By default a step: only
+                                      // vertices wholly carried by modelled bones take the
+                                      // field's surface; own_fade_high = 0: no fade
   int relax_passes = 2;               // tangential relaxation passes (0: off)
   float relax_rate = 0.5f;            // fraction of the way to the rest barycentre per pass
   float relax_min_offset = 1e-3f;     // relax joint vertices that moved more than this (m)

@@ -196,6 +196,8 @@ void encodeCalibration(const Calibration& c, ByteWriter& w) {
   w.array(std::span<const float>(c.w));
   w.array(std::span<const float>(c.slope));
   w.array(std::span<const std::uint8_t>(c.rigid));
+  w.u32(static_cast<std::uint32_t>(c.own_weight.size()));
+  w.array(std::span<const float>(c.own_weight));
   w.u32(static_cast<std::uint32_t>(c.pairs.size()));
   w.array(std::span<const std::uint32_t>(c.pair_offsets));
   for (const VertexPair& p : c.pairs) {
@@ -226,6 +228,11 @@ Result<Calibration> decodeCalibration(std::span<const std::uint8_t> bytes, const
   r.array(c.w, nv);
   r.array(c.slope, nv);
   r.array(c.rigid, nv);
+  const std::uint32_t nown = r.u32();
+  if (r.ok() && nown != 0 && nown != nv) {
+    return fail("calibration: {} own weights for {} vertices", nown, nv);
+  }
+  r.array(c.own_weight, nown);
   const std::uint32_t npairs = r.u32();
   r.array(c.pair_offsets, static_cast<std::size_t>(nv) + 1);
   if (!r.ok() || npairs > r.remaining() / 7) return fail("calibration: bad pair count {}", npairs);

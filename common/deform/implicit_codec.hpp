@@ -21,7 +21,7 @@ namespace vistel {
 
 inline constexpr std::uint32_t kPrimitiveSetVersion = 2;
 inline constexpr std::uint32_t kCombinationGraphVersion = 1;
-inline constexpr std::uint32_t kCalibrationVersion = 1;
+inline constexpr std::uint32_t kCalibrationVersion = 2;  // 2: own_weight
 
 void encodePrimitiveSet(const PrimitiveSet& set, ByteWriter& out);
 void encodeCombinationGraph(const CombinationGraph& graph, ByteWriter& out);

@@ -128,6 +128,14 @@ Status validateCalibration(const Calibration& c, const PrimitiveSet& s, int vert
     return fail("calibration: arrays do not have {} vertices", vertex_count);
   }
   if (c.ring.size() != c.ring_weights.size()) return fail("calibration: ring sizes differ");
+  if (!c.own_weight.empty() && c.own_weight.size() != nv) {
+    return fail("calibration: {} own weights for {} vertices", c.own_weight.size(), vertex_count);
+  }
+  for (std::size_t v = 0; v < c.own_weight.size(); ++v) {
+    if (!(c.own_weight[v] >= 0.0f && c.own_weight[v] <= 1.0f)) {
+      return fail("calibration: vertex {} own weight {} outside [0, 1]", v, c.own_weight[v]);
+    }
+  }
   const auto check_offsets = [&](const std::vector<std::uint32_t>& off, std::size_t total,
                                  std::string_view what) -> Status {
     if (off[0] != 0 || off[nv] != total) return fail("calibration: {} offsets do not span", what);

@@ -166,6 +166,10 @@ struct Calibration {
   std::vector<std::uint8_t> rigid;                 // (nvert) 1: a limb vertex skinned
                                                    // entirely by its primitive's bone, so
                                                    // D_v cannot change while untouched
+  std::vector<float> own_weight;                   // (nvert, or empty: all 1) the share of
+                                                   // the vertex's skin weight carried by
+                                                   // its own primitives' bones (see
+                                                   // DeformOptions::own_fade_low)
   std::vector<std::uint32_t> pair_offsets;         // (nvert + 1) into pairs
   std::vector<VertexPair> pairs;                   // rest-contact / always pairs
   std::vector<std::uint32_t> ring_offsets;         // (nvert + 1) into ring

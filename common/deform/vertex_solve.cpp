@@ -102,6 +102,17 @@ bool lineExit(const PosedPrimitive& prim, float rho, const glm::vec3& p, const g
   return true;
 }
 
+// The share of vertex vi's own-field surface that is faded into its skinned position
+// (DeformOptions::own_fade_low): 0 where its own primitives' bones carry enough of its skin
+// weight (and for models without Calibration::own_weight), 1 where they carry too little.
+float skinnedShare(const DeformFrame& fr, std::size_t vi) {
+  const std::vector<float>& own = fr.model->calibration.own_weight;
+  const float lo = fr.opt->own_fade_low, hi = fr.opt->own_fade_high;
+  if (own.empty() || !(hi > 0.0f) || own[vi] >= hi) return 0.0f;
+  if (own[vi] <= lo || !(hi > lo)) return 1.0f;
+  return (hi - own[vi]) / (hi - lo);
+}
+
 // Fills vp's own part for vertex v (no candidates).
 void gatherOwn(const DeformFrame& fr, int v, VertexProblem& vp) {
   const ImplicitModel& m = *fr.model;
@@ -130,6 +141,17 @@ void gatherOwn(const DeformFrame& fr, int v, VertexProblem& vp) {
   vp.overflow = false;
   vp.last_point = glm::vec3(NAN);
   vp.hard_point = glm::vec3(NAN);
+  // The faded own surface: w_v D_v solved for T shifted by the share of the skinned
+  // position's own excess (0 there for a fully faded vertex: its skinned position).
+  vp.target = vp.iso;
+  if (vp.cls != VertexClass::kFree) {
+    const float keep = skinnedShare(fr, vi);
+    if (keep > 0.0f) {
+      glm::vec3 grad;
+      FieldValues lanes;
+      vp.target += keep * ownExcess(vp, vp.p0, grad, lanes);
+    }
+  }
 }
 
 // Loads vertex v's cached candidates into vp with their material terms. with_bulge: use
@@ -379,12 +401,19 @@ namespace {
 struct LoneStart {
   float g;
   glm::vec3 grad;
+  float target;  // what w_v F_p0 is solved for (VertexProblem::target)
 };
 LoneStart loneStart(const DeformFrame& fr, std::size_t vi) {
   const Calibration& cal = fr.model->calibration;
+  const PosedPrimitive& prim = fr.posed->items[static_cast<std::size_t>(cal.prims[vi][0])];
   LoneStart start;
-  start.g = loneEquation(fr.posed->items[static_cast<std::size_t>(cal.prims[vi][0])], cal.w[vi],
-                         fr.model->primitives.iso,
+  start.target = fr.model->primitives.iso;
+  const float keep = skinnedShare(fr, vi);
+  if (keep > 0.0f) {
+    start.target += keep * (cal.w[vi] * primitiveField(prim, fr.in->rigid_positions[vi]) -
+                            fr.model->primitives.iso);
+  }
+  start.g = loneEquation(prim, cal.w[vi], start.target,
                          fr.in->rigid_positions[vi] + fr.st->offset[vi] * fr.in->rigid_normals[vi],
                          start.grad);
   return start;
@@ -402,7 +431,7 @@ bool solveLoneLimb(const DeformFrame& fr, int v, const LoneStart& start, DeformC
   const auto& pr = cal.prims[vi];
   const PosedPrimitive& prim = fr.posed->items[static_cast<std::size_t>(pr[0])];
   const float w = cal.w[vi];
-  const float iso = fr.model->primitives.iso;
+  const float iso = start.target;
   const glm::vec3 p0 = fr.in->rigid_positions[vi];
   const glm::vec3 dir = fr.in->rigid_normals[vi];
   const float s_start = st.offset[vi];

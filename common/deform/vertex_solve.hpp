@@ -52,6 +52,8 @@ struct VertexProblem {
   float w = 1.0f;
   float slope = 0.0f;
   float iso = 0.5f;
+  float target = 0.5f;  // what w_v D_v is solved for: iso, shifted towards the skinned
+                        // position's own value where the own field is faded (ownFade)
   int diff_exponent = 4;
   glm::vec3 p0{0.0f};      // origin of the projection line (the rigid position)
   bool p0_rigid = false;   // a free vertex's p0, its rigid position (where the candidates'
@@ -82,7 +84,7 @@ inline float ownSum(VertexProblem& vp, glm::vec3& grad, Field&& field) {
   grad = vp.w * g0;
   vp.smooth_gradient = vp.w * own.gradient;
   vp.own_side = vp.w * own.value;
-  return vp.w * d - vp.iso;
+  return vp.w * d - vp.target;
 }
 
 // w_v D_v(P) - T (or the free vertex's planar excess) and its gradient; also the outward

@@ -416,6 +416,41 @@ Result<ImplicitModel> buildImplicitModel(const AvatarModel& avatar, const Primit
       }
     }
   }
+  // How much of each vertex's skin the bones its own field models carry (the own field's
+  // fade, DeformOptions::own_fade_low): its own primitives' bones, and a limb's partner
+  // across a joint primitive (whose DIFF models the blend between the two).
+  cal.own_weight.assign(nv, 1.0f);
+  {
+    std::vector<std::array<std::int16_t, 2>> joined;  // limb pairs a joint primitive blends
+    for (std::size_t p = 0; p < set.items.size(); ++p) {
+      const PrimitiveSpec& ps = spec.primitives[static_cast<std::size_t>(spec_of[p])];
+      if (ps.role != PrimitiveRole::kJoint) continue;
+      joined.push_back({mi(b.specIndex(ps.between[0])), mi(b.specIndex(ps.between[1]))});
+    }
+    const auto bone_of = [&](std::int16_t p) {
+      return set.items[static_cast<std::size_t>(p)].bone;
+    };
+    const auto k = static_cast<std::size_t>(mesh.influences);
+    std::vector<int> modelled;
+    for (std::size_t v = 0; v < nv; ++v) {
+      if (cal.vertex_class[v] == VertexClass::kFree) continue;
+      const auto& pr = cal.prims[v];
+      modelled.clear();
+      for (const std::int16_t p : pr) {
+        if (p >= 0) modelled.push_back(bone_of(p));
+      }
+      for (const auto& [la, lb] : joined) {
+        if (pr[0] == la && lb >= 0) modelled.push_back(bone_of(lb));
+        if (pr[0] == lb && la >= 0) modelled.push_back(bone_of(la));
+      }
+      float own = 0.0f;
+      for (std::size_t s = 0; s < k; ++s) {
+        if (std::find(modelled.begin(), modelled.end(), mesh.joints[v * k + s]) != modelled.end())
+          own += mesh.weights[v * k + s];
+      }
+      cal.own_weight[v] = std::clamp(own, 0.0f, 1.0f);
+    }
+  }
 
   // Combination graph: joints blend their two limbs; everything else that collides does,
   // except a joint with its own limbs and the map's no_collide pairs.

@@ -98,6 +98,54 @@ TEST(Build, ArmClassesGraphAndFit) {
   EXPECT_EQ(report.calibration.joint, joint);
 }
 
+// Calibration::own_weight: the share of a vertex's skin its own field models. Across the
+// elbow the blend of the two limbs is the joint's, so the whole tube counts 1; skin weight
+// moved to the tip joint, which no primitive follows, does not count.
+TEST(Build, OwnWeightIsTheSkinTheFieldModels) {
+  AvatarModel avatar = test::makeArmAvatar();
+  Result<PrimitiveMapSpec> spec = parsePrimitiveMap(test::armMapToml(), "arm.toml");
+  ASSERT_TRUE(spec.ok());
+  Result<ImplicitModel> model = buildImplicitModel(avatar, *spec, nullptr);
+  ASSERT_TRUE(model.ok()) << model.error().message;
+  const Calibration& cal = model->calibration;
+  ASSERT_EQ(cal.own_weight.size(), static_cast<std::size_t>(avatar.skin.vertexCount()));
+  int blended = 0;
+  for (int v = 0; v < avatar.skin.vertexCount(); ++v) {
+    const auto vi = static_cast<std::size_t>(v);
+    const float w1 = avatar.skin.weights[2 * vi + 1];
+    if (w1 > 0.0f && w1 < 1.0f) ++blended;
+    EXPECT_NEAR(cal.own_weight[vi], 1.0f, 1e-5f) << "vertex " << v;
+  }
+  EXPECT_GT(blended, 50);
+
+  // A quarter of every upper-arm vertex's weight handed to the tip joint.
+  const int tip = avatar.skeleton.find("tip");
+  ASSERT_GE(tip, 0);
+  std::vector<int> moved;
+  for (int v = 0; v < avatar.skin.vertexCount(); ++v) {
+    const auto vi = static_cast<std::size_t>(v);
+    if (avatar.skin.weights[2 * vi + 1] != 0.0f) continue;  // upper arm alone
+    avatar.skin.weights[2 * vi] = 0.75f;
+    avatar.skin.joints[2 * vi + 1] = static_cast<std::uint16_t>(tip);
+    avatar.skin.weights[2 * vi + 1] = 0.25f;
+    moved.push_back(v);
+  }
+  ASSERT_GT(moved.size(), 50u);
+  Result<ImplicitModel> handed = buildImplicitModel(avatar, *spec, nullptr);
+  ASSERT_TRUE(handed.ok()) << handed.error().message;
+  for (const int v : moved) {
+    if (handed->calibration.vertex_class[static_cast<std::size_t>(v)] == VertexClass::kFree)
+      continue;
+    EXPECT_NEAR(handed->calibration.own_weight[static_cast<std::size_t>(v)], 0.75f, 1e-5f)
+        << "vertex " << v;
+  }
+  // It survives the model's file.
+  Result<ImplicitModel> decoded = decodeImplicitModel(
+      encodeImplicitModel(*handed), avatar.skeleton.jointCount(), avatar.skin.vertexCount());
+  ASSERT_TRUE(decoded.ok()) << decoded.error().message;
+  EXPECT_EQ(decoded->calibration.own_weight, handed->calibration.own_weight);
+}
+
 TEST(Build, MissingJointsSkipPrimitivesWithWarnings) {
   AvatarModel avatar = test::makeArmAvatar();
   std::string toml = test::armMapToml();
