@@ -215,8 +215,10 @@ Result<Calibration> decodeCalibration(std::span<const std::uint8_t> bytes, const
                                       int vertex_count) {
   ByteReader r(bytes);
   const std::uint32_t version = r.u32();
-  if (r.ok() && version != kCalibrationVersion) {
-    return fail("calibration: version {} (this build reads {})", version, kCalibrationVersion);
+  // Version 1 had no own weights: read as none (the own field is not faded).
+  if (r.ok() && version != kCalibrationVersion && version != 1) {
+    return fail("calibration: version {} (this build reads 1 and {})", version,
+                kCalibrationVersion);
   }
   Calibration c;
   const std::uint32_t nv = r.u32();
@@ -228,7 +230,7 @@ Result<Calibration> decodeCalibration(std::span<const std::uint8_t> bytes, const
   r.array(c.w, nv);
   r.array(c.slope, nv);
   r.array(c.rigid, nv);
-  const std::uint32_t nown = r.u32();
+  const std::uint32_t nown = version >= 2 ? r.u32() : 0;
   if (r.ok() && nown != 0 && nown != nv) {
     return fail("calibration: {} own weights for {} vertices", nown, nv);
   }

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "common/base/bytes.hpp"
 #include "common/deform/implicit_codec.hpp"
 #include "tests/deform/fixtures.hpp"
 
@@ -108,6 +109,39 @@ TEST(Codec, CorruptValuesAreRejectedWithReasons) {
       EXPECT_TRUE(validateImplicitModel(*r, 3, nv).ok());
     }
   }
+}
+
+// A version 1 calibration (before own weights) still reads, with none (no fade); the
+// current version carries them; an unknown version is refused by name.
+TEST(Codec, CalibrationVersionOneReadsWithoutOwnWeights) {
+  auto arm = test::armBody();
+  const Calibration& cal = arm->model.calibration;
+  ASSERT_EQ(cal.own_weight.size(), static_cast<std::size_t>(arm->mesh.vertexCount()));
+  std::vector<std::uint8_t> v2;
+  ByteWriter w2(v2);
+  encodeCalibration(cal, w2);
+  Result<Calibration> back = decodeCalibration(v2, arm->model.primitives, arm->mesh.vertexCount());
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(back->own_weight, cal.own_weight);
+
+  // Version 1: the same bytes without the own weights' count and array.
+  const std::size_t nv = cal.vertex_class.size();
+  const std::size_t at = 8 + nv * (1 + 8 + 4 + 4 + 1);
+  std::vector<std::uint8_t> v1(v2.begin(), v2.begin() + static_cast<std::ptrdiff_t>(at));
+  v1.insert(v1.end(), v2.begin() + static_cast<std::ptrdiff_t>(at + 4 + 4 * nv), v2.end());
+  v1[0] = 1;
+  Result<Calibration> old = decodeCalibration(v1, arm->model.primitives, arm->mesh.vertexCount());
+  ASSERT_TRUE(old.ok()) << old.error().message;
+  EXPECT_TRUE(old->own_weight.empty());
+  EXPECT_EQ(old->w, cal.w);
+  EXPECT_EQ(old->ring, cal.ring);
+
+  v2[0] = 9;
+  Result<Calibration> unknown =
+      decodeCalibration(v2, arm->model.primitives, arm->mesh.vertexCount());
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_NE(unknown.error().message.find("version 9"), std::string::npos)
+      << unknown.error().message;
 }
 
 }  // namespace
