@@ -64,7 +64,9 @@ Result<std::unique_ptr<ClipPlayer>> ClipPlayer::create(MotionClip clip, const Sk
   if (!source_map) return withContext(p->clip_.source + " (clip skeleton)", source_map.error());
   auto target_map = selectJointMap(*maps, as);
   if (!target_map) return withContext(p->clip_.source + " (avatar skeleton)", target_map.error());
-  auto retargeter = Retargeter::create(cs, **source_map, as, **target_map);
+  // forClip: against the clip's natural pose (its zero pose may not be one: the gesture
+  // clips' lays the bones along the axes and twists a leg half a turn).
+  auto retargeter = Retargeter::forClip(p->clip_, **source_map, as, **target_map);
   if (!retargeter) return withContext(p->clip_.source, retargeter.error());
   p->retargeter_.emplace(std::move(*retargeter));
   return p;

@@ -51,7 +51,7 @@ Result<Posture> clipPosture(const PoseOptions& opt, const Skeleton& target) {
     return withContext(fmt::format("{}: no joint map fits the avatar", opt.file),
                        target_map.error());
   }
-  Result<Retargeter> retargeter = Retargeter::create(source, **source_map, target, **target_map);
+  Result<Retargeter> retargeter = Retargeter::forClip(*clip, **source_map, target, **target_map);
   if (!retargeter) return withContext("retargeting", retargeter.error());
   Posture out;
   retargeter->apply(source_posture, out);

@@ -100,7 +100,7 @@ Result<Retargeter> retargeterFor(const Avatar& a, const test::Body& b, const Mot
   const Skeleton cs = clipSkeleton(clip);
   Result<const JointMap*> cmap = selectJointMap(a.maps, cs);
   if (!cmap) return cmap.error();
-  return Retargeter::create(cs, **cmap, b.skeleton, *a.map);
+  return Retargeter::forClip(clip, **cmap, b.skeleton, *a.map);
 }
 
 // Deepest penetration between two parts (both ways), rigid and deformed.

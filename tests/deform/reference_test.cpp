@@ -113,7 +113,7 @@ TEST(Reference, MakehumanFramesMatchTheFastPath) {
   const Skeleton cs = clipSkeleton(*clip);
   Result<const JointMap*> cmap = selectJointMap(a->maps, cs);
   ASSERT_TRUE(cmap.ok()) << cmap.error().message;
-  Result<Retargeter> rt = Retargeter::create(cs, **cmap, body[0]->skeleton, *a->map);
+  Result<Retargeter> rt = Retargeter::forClip(*clip, **cmap, body[0]->skeleton, *a->map);
   ASSERT_TRUE(rt.ok()) << rt.error().message;
   constexpr int kFrames = 6;
   const int first = clip->frame_count / 2 - 12;

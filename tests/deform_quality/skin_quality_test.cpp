@@ -91,7 +91,7 @@ ClipMeasures play(const test::RealAvatar& a, const MotionClip& clip) {
   Result<const JointMap*> cmap = selectJointMap(a.maps, cs);
   EXPECT_TRUE(cmap.ok()) << clip.source;
   if (!cmap) return m;
-  Result<Retargeter> rt = Retargeter::create(cs, **cmap, b->skeleton, *a.map);
+  Result<Retargeter> rt = Retargeter::forClip(clip, **cmap, b->skeleton, *a.map);
   EXPECT_TRUE(rt.ok()) << rt.error().message;
   if (!rt) return m;
   const Regions regions = regionsOf(*b);
