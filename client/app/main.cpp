@@ -7,6 +7,7 @@
 //                 [--sensors FILE.toml [--calibrate-after S] | --source sim:CLIP.bvh
 //                  | --source recording:FILE.vrec] [--record FILE.vrec]
 //                 [--forces-out FILE.csv] [--force-feedback SENSORS.toml] [--log-level LEVEL]
+//                 [--netsim SPEC]
 //   vistel-client --version   (the project version and the protocol versions it speaks)
 //
 // With sensors (client/app/sensor_input.hpp) a sensor thread reads the devices (or the
@@ -29,7 +30,11 @@
 // frame's forces. --forces-out streams those forces as CSV, a row per frame per part in
 // contact (and one when it lets go); a [force_feedback] section in the sensors config
 // (--sensors, or --force-feedback naming a sensors config) sends them to a HID
-// force-feedback device, at most at the frame rate.
+// force-feedback device, at most at the frame rate. The stats' "playback" object says
+// how each remote member was shown (client/net/playback_stats.hpp): frames interpolated,
+// held and extrapolated, and the shown posture's age p50/p99. --netsim SPEC (or [network]
+// netsim) puts a simulated bad network between the client and the server on UDP
+// (client/net/net_sim.hpp: loss, latency, jitter, duplication, reordering).
 //
 // Threads: this (main) thread owns the window/GL and renders; a network thread runs
 // Asio (NetDriver); a source thread produces the own postures; the room view skins in
@@ -66,6 +71,7 @@
 #include "client/net/clip_player.hpp"
 #include "client/net/data_dir.hpp"
 #include "client/net/net_driver.hpp"
+#include "client/net/playback_stats.hpp"
 #include "client/net/prop_models.hpp"
 #include "client/view/room_view.hpp"
 #include "common/avatar/avatar_io.hpp"
@@ -247,6 +253,12 @@ int main(int argc, char** argv) {
                  "(default: the --sensors file)");
   SensorArgs sensor_args;
   addSensorOptions(app, sensor_args);
+  std::string netsim_text;
+  auto* netsim_opt = app.add_option(
+      "--netsim", netsim_text,
+      "simulate a bad network on UDP: comma-separated loss=P, latency=D, jitter=D, "
+      "jitter_dist=uniform|normal, dup=P, reorder=P, reorder_delay=D, dir=both|in|out, seed=N "
+      "(e.g. loss=0.1,latency=30ms,jitter=50ms; overrides [network] netsim)");
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error, off (default: info)");
   app.set_version_flag("--version",
@@ -286,6 +298,11 @@ int main(int argc, char** argv) {
   auto server = parseServerAddress(server_text);
   if (!server) {
     spdlog::error("{}", server.error().message);
+    return 2;
+  }
+  const auto netsim = parseNetSimSpec(netsim_opt->count() > 0 ? netsim_text : config->netsim);
+  if (!netsim) {
+    std::fprintf(stderr, "vistel-client: %s\n", netsim.error().message.c_str());
     return 2;
   }
   if (avatar_path.empty()) avatar_path = defaultAvatarPath();
@@ -400,6 +417,7 @@ int main(int argc, char** argv) {
   asio::io_context io;
   auto work = asio::make_work_guard(io);
   auto driver = NetDriver::create(io, *server, settings, cache);
+  driver->setNetSim(*netsim);
   driver->start();
   std::thread network([&io] { io.run(); });
   std::atomic<bool> stop_source{false};
@@ -436,6 +454,7 @@ int main(int argc, char** argv) {
         "--rigid-only): they stay zero");
   }
   FrameFigures figures;
+  PlaybackStats playback;  // how each remote member was shown
   ServerInteractions server_lists;
   InteractionList received_list;
   std::unordered_map<std::string, std::shared_ptr<const AvatarModel>> models;
@@ -453,7 +472,8 @@ int main(int argc, char** argv) {
     }
     // Copy the roster and postures out under the session lock.
     driver->withSession([&](const ClientSession& s, double now) {
-      const double play_time = s.serverTime(now) - config->interpolation_delay_s;
+      const double server_now = s.serverTime(now);
+      const double play_time = server_now - config->interpolation_delay_s;
       members.resize(s.members().size());
       for (std::size_t i = 0; i < members.size(); ++i) {
         const RemoteMember& m = *s.members()[i];
@@ -463,7 +483,14 @@ int main(int argc, char** argv) {
         f.avatar_hash = m.avatar_hash;
         f.seat = m.seat;
         f.is_self = m.is_self;
-        f.has_posture = !m.is_self && m.buffer.sample(play_time, f.posture);
+        f.has_posture = false;
+        if (!m.is_self) {
+          double captured = 0.0;
+          const JitterBuffer::Shown shown =
+              m.buffer.sampleShown(play_time, config->max_extrapolation_s, f.posture, &captured);
+          f.has_posture = shown != JitterBuffer::Shown::kNone;
+          if (s.state() == SessionState::kLive) playback.add(m.name, shown, server_now - captured);
+        }
       }
       props.clear();
       prop_states.resize(s.props().size());
@@ -577,11 +604,12 @@ int main(int argc, char** argv) {
     line +=
         fmt::format(" latency mean {:.2f} ms, p99 {:.2f} ms; {} frames rendered",
                     s.stats().latency.mean(), s.stats().latency.percentile(99.0), frames_rendered);
+    line += "; shown: " + playbackSummary(playback.total());
     return std::make_pair(text, line);
   });
   if (!stats_path.empty()) {
-    const std::string fields =
-        figures.json() + (own_forces ? ",\n" + own_forces->json() : std::string());
+    const std::string fields = figures.json() + ",\n  \"playback\": " + playbackJson(playback) +
+                               (own_forces ? ",\n" + own_forces->json() : std::string());
     if (Status st = writeFileText(stats_path, withFields(json, fields)); !st) {
       spdlog::error("{}", st.error().message);
       exit_code = 1;

@@ -8,6 +8,7 @@ std::string botReportJson(const std::vector<ParticipantReport>& participants) {
   nlohmann::json doc;
   doc["participants"] = nlohmann::json::array();
   LatencyStats all;
+  PlaybackStats shown;
   for (const ParticipantReport& p : participants) {
     std::uint64_t received = 0;
     for (const auto& [name, m] : p.stats.members) received += m.postures_received;
@@ -29,13 +30,16 @@ std::string botReportJson(const std::vector<ParticipantReport>& participants) {
                                    {"latency_ms",
                                     {{"p50", p.stats.latency.percentile(50.0)},
                                      {"p99", p.stats.latency.percentile(99.0)},
-                                     {"samples", p.stats.latency.count()}}}});
+                                     {"samples", p.stats.latency.count()}}},
+                                   {"playback", nlohmann::json::parse(playbackJson(p.playback))}});
     all.merge(p.stats.latency);
+    shown.merge(p.playback);
   }
   doc["latency_ms"] = {{"p50", all.percentile(50.0)},
                        {"p99", all.percentile(99.0)},
                        {"mean", all.mean()},
                        {"samples", all.count()}};
+  doc["playback"] = nlohmann::json::parse(playbackJson(shown));
   nlohmann::json bins = nlohmann::json::array();
   for (std::size_t i = 0; i < all.bins().size(); ++i) {
     if (all.bins()[i] != 0) bins.push_back({i, all.bins()[i]});

@@ -4,7 +4,7 @@
 //
 //   vistel-bot --server HOST:PORT --room R --name N (--bvh FILE | --recording FILE)
 //              [--avatar FILE] [--loop] [--duration S] [--count K] [--config FILE]
-//              [--stats-json FILE] [--log-level LEVEL]
+//              [--stats-json FILE] [--log-level LEVEL] [--netsim SPEC]
 //   vistel-bot --version
 //
 // K participants (named N-1 .. N-K when K > 1, else N) join room R, each with the avatar
@@ -16,7 +16,12 @@
 // end (without --loop), after --duration seconds, or on SIGINT/SIGTERM, leaving the room
 // cleanly. A join refused for a transient reason (the server full, say) is tried again
 // with a jittered backoff (NetDriver). --stats-json writes, at the end, each
-// participant's join time, retries, bytes and latency (client/bot/bot_report.hpp).
+// participant's join time, retries, bytes and latency (client/bot/bot_report.hpp), and
+// how it would have shown the others: at each send it samples every remote member's
+// jitter buffer as a client's frame would ([playback] delay and extrapolation; no
+// blending) and counts frames interpolated, held and extrapolated and the shown age.
+// --netsim SPEC (or [network] netsim) puts a simulated bad network between each
+// participant and the server on UDP (client/net/net_sim.hpp), seeded per participant.
 // Never initialises GLFW. Exit status: 0, 1 on an error (a participant the server refused
 // or dropped included: the refusal is printed), 2 on bad usage (an unknown --log-level too).
 
@@ -42,6 +47,7 @@
 #include "client/net/clip_player.hpp"
 #include "client/net/data_dir.hpp"
 #include "client/net/net_driver.hpp"
+#include "client/net/playback_stats.hpp"
 #include "common/avatar/avatar_io.hpp"
 #include "common/base/file.hpp"
 #include "common/motion/bvh.hpp"
@@ -84,6 +90,12 @@ int main(int argc, char** argv) {
                  "write each participant's join time, bytes and latency as JSON at the end");
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error, off (default: info)");
+  std::string netsim_text;
+  auto* netsim_opt = app.add_option(
+      "--netsim", netsim_text,
+      "simulate a bad network on UDP for every participant: comma-separated loss=P, latency=D, "
+      "jitter=D, jitter_dist=uniform|normal, dup=P, reorder=P, reorder_delay=D, dir=both|in|out, "
+      "seed=N (e.g. loss=0.1,latency=30ms,jitter=50ms; overrides [network] netsim)");
   app.set_version_flag("--version",
                        versionLine("vistel-bot", net::kProtocolVersion, wire::kWireVersion));
   CLI11_PARSE(app, argc, argv);
@@ -115,6 +127,11 @@ int main(int argc, char** argv) {
   auto server = parseServerAddress(server_text);
   if (!server) {
     spdlog::error("{}", server.error().message);
+    return 2;
+  }
+  const auto netsim = parseNetSimSpec(netsim_opt->count() > 0 ? netsim_text : config->netsim);
+  if (!netsim) {
+    std::fprintf(stderr, "vistel-bot: %s\n", netsim.error().message.c_str());
     return 2;
   }
   if (avatar_path.empty()) avatar_path = defaultAvatarPath();
@@ -187,6 +204,7 @@ int main(int argc, char** argv) {
     settings.name = count > 1 ? name + "-" + std::to_string(i + 1) : name;
     names.push_back(settings.name);
     drivers.push_back(NetDriver::create(io, *server, settings, nullptr));
+    drivers.back()->setNetSim(*netsim);
     drivers.back()->start();
   }
   std::thread network([&io] { io.run(); });
@@ -200,6 +218,7 @@ int main(int argc, char** argv) {
   double interval = 1.0 / clip_rate;
   bool rate_fixed = false;
   Posture posture;
+  std::vector<PlaybackStats> playback(drivers.size());  // what each participant would show
   std::int64_t frame = 0;
   int exit_code = 0;
   while (!g_stop) {
@@ -233,6 +252,19 @@ int main(int argc, char** argv) {
       ++open;
       if (!replay) players[static_cast<std::size_t>(i)]->sample(t, loop, posture);
       drivers[static_cast<std::size_t>(i)]->sendPosture(posture);
+      // What a client's frame would show of each remote member now.
+      drivers[static_cast<std::size_t>(i)]->withSession([&](const ClientSession& s, double now) {
+        if (s.state() != SessionState::kLive) return 0;
+        const double server_now = s.serverTime(now);
+        const double play_time = server_now - config->interpolation_delay_s;
+        for (const auto& m : s.members()) {
+          if (m->is_self) continue;
+          double captured = 0.0;
+          const auto shown = m->buffer.classify(play_time, config->max_extrapolation_s, &captured);
+          playback[static_cast<std::size_t>(i)].add(shown, server_now - captured);
+        }
+        return 0;
+      });
     }
     if (open == 0) break;
     ++frame;
@@ -251,6 +283,7 @@ int main(int argc, char** argv) {
       r.rejoins = drivers[i]->rejoins();
       r.live_s = r.join_s < 0.0 ? 0.0 : std::max(0.0, end - started_at - r.join_s);
       r.stats = drivers[i]->withSession([](const ClientSession& s, double) { return s.stats(); });
+      r.playback = playback[i];
     }
     if (Status st = writeFileText(stats_path, botReportJson(reports)); !st) {
       spdlog::error("--stats-json: {}", st.error().message);

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include "client/net/net_sim.hpp"
 #include "common/base/embedded.hpp"
 #include "common/config/config_table.hpp"
 
@@ -47,11 +48,17 @@ Result<ClientConfig> parseClientConfig(std::string_view toml_text, std::string_v
   VISTEL_CONFIG_TRY(network.number("server_timeout_s", s.server_timeout_s, 0.5, 3600));
   VISTEL_CONFIG_TRY(network.number("rehello_after_s", s.rehello_after_s, 0.1, 3600));
   VISTEL_CONFIG_TRY(network.number("reconnect_give_up_s", s.reconnect_give_up_s, 0, 86400));
+  VISTEL_CONFIG_TRY(network.string("netsim", c.netsim));
+  if (auto sim = parseNetSimSpec(c.netsim, fmt::format("{}: [network] netsim", source_name));
+      !sim) {
+    return sim.error();
+  }
   VISTEL_CONFIG_TRY(network.checkUnknown());
 
   ConfigTable playback(root, "playback", source_name);
   VISTEL_CONFIG_TRY(playback.number("interpolation_delay_s", c.interpolation_delay_s, 0, 5));
   VISTEL_CONFIG_TRY(playback.number("jitter_capacity", s.jitter_capacity, 2, 1024));
+  VISTEL_CONFIG_TRY(playback.number("max_extrapolation_s", c.max_extrapolation_s, 0, 1));
   VISTEL_CONFIG_TRY(playback.checkUnknown());
 
   ConfigTable source(root, "source", source_name);

@@ -18,6 +18,12 @@ struct ClientConfig {
   // the program).
   SessionSettings session;
   double interpolation_delay_s = 0.1;  // remote postures play this far behind server now
+  // [playback]: how far past a member's newest posture its motion is continued before
+  // it is held (JitterBuffer::sampleShown); 0 holds at once.
+  double max_extrapolation_s = 0.1;
+  // [network] netsim: a network simulator spec (net_sim.hpp; checked here, "" = none).
+  // --netsim overrides it.
+  std::string netsim;
   // [source]
   double idle_rate_hz = 30.0;  // own postures per second when the source has no rate
   // [avatars]

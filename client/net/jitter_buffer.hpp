@@ -33,6 +33,27 @@ class JitterBuffer {
   // extrapolated). False when empty. out.time = t clamped to the buffered span.
   bool sample(double t, Posture& out) const;
 
+  // What a sample at t shows (playback_stats.hpp counts them).
+  enum class Shown {
+    kNone,          // nothing buffered
+    kInterpolated,  // t within the buffered span: blended from the two around t
+    kHeld,          // no data for t: before the oldest (the oldest shown), or past the newest
+                    // by more than the extrapolation limit (the pose at the limit, frozen)
+    kExtrapolated,  // past the newest by at most the limit: continued along the last two
+  };
+  // sample() with extrapolation: past the newest posture by up to max_extrapolation_s
+  // (seconds, >= 0; 0 = hold as sample() does), the motion from the second newest to the
+  // newest continues (rotations along their great arcs, translations along lines); further
+  // past, the pose reached at the limit is held (no jump back). Needs two postures at
+  // least 0.1 ms apart to extrapolate, else it holds. `shown_capture_time` (optional)
+  // receives the capture time (server clock) of what is shown: t when interpolated, the
+  // oldest's or the newest's time otherwise (extrapolation invents no newer data), so
+  // serverNow - it is the shown posture's age. No allocation once `out` has the joints.
+  Shown sampleShown(double t, double max_extrapolation_s, Posture& out,
+                    double* shown_capture_time = nullptr) const;
+  // What sampleShown would return, without computing the posture (cheap: no blending).
+  Shown classify(double t, double max_extrapolation_s, double* shown_capture_time = nullptr) const;
+
   int size() const { return count_; }
   bool empty() const { return count_ == 0; }
   double oldestTime() const;
@@ -44,6 +65,7 @@ class JitterBuffer {
     std::uint16_t sequence = 0;
     Posture posture;
   };
+  static constexpr double kMinExtrapolationSpan = 1e-4;  // seconds between the last two
   std::vector<Entry> entries_;  // first count_ used, ascending capture time
   int count_ = 0;
 };

@@ -365,6 +365,7 @@ void NetDriver::closeSockets() {
   closed_ = true;
   boost::system::error_code ignored;
   timer_.cancel();
+  if (netsim_) netsim_->clear();  // what was in flight went with the sockets
   tcp_.shutdown(asio::ip::tcp::socket::shutdown_both, ignored);
   tcp_.close(ignored);
   udp_.close(ignored);
@@ -387,6 +388,10 @@ void NetDriver::flush() {
   }
   // Datagrams now (a full socket buffer drops them, as the network would).
   for (const auto& d : datagrams) {
+    if (netsim_) {
+      netsim_->send(d, monotonicSeconds());  // sent by the simulator when due
+      continue;
+    }
     boost::system::error_code ec;
     udp_.send(asio::buffer(d), 0, ec);
   }
@@ -453,16 +458,49 @@ void NetDriver::readDatagram() {
   auto on_datagram = [this, self = shared_from_this(), generation](
                          const boost::system::error_code& ec, std::size_t n) {
     if (closed_ || generation != udp_generation_) return;
-    if (!ec) {
-      std::lock_guard lock(mutex_);
-      const double now = monotonicSeconds();
-      session_->onDatagram(std::span(datagram_buffer_.data(), n), now);
-      noteLive(now);  // the handshake may just have finished
+    if (!ec && netsim_) {
+      netsim_->receive(std::span(datagram_buffer_.data(), n), monotonicSeconds());
+    } else if (!ec) {
+      deliverDatagram(std::span(datagram_buffer_.data(), n));
     }
     // Errors such as ICMP port unreachable are transient on UDP: keep receiving.
     readDatagram();
   };
   udp_.async_receive(asio::buffer(datagram_buffer_), std::move(on_datagram));
+}
+
+void NetDriver::deliverDatagram(std::span<const std::uint8_t> datagram) {
+  std::lock_guard lock(mutex_);
+  const double now = monotonicSeconds();
+  session_->onDatagram(datagram, now);
+  noteLive(now);  // the handshake may just have finished
+}
+
+void NetDriver::setNetSim(const NetSimSpec& spec) {
+  if (!spec.active()) {
+    netsim_.reset();
+    return;
+  }
+  std::uint64_t seed = 0;
+  {
+    std::lock_guard lock(mutex_);
+    seed = netSimSeed(spec, settings_.name);
+  }
+  // The simulator hands datagrams back on the strand; it does not keep the driver alive.
+  std::weak_ptr<NetDriver> weak = weak_from_this();
+  auto to_server = [weak](std::span<const std::uint8_t> d) {
+    auto self = weak.lock();
+    if (!self || self->closed_ || !self->connected_) return;
+    boost::system::error_code ec;
+    self->udp_.send(asio::buffer(d.data(), d.size()), 0, ec);
+  };
+  auto to_program = [weak](std::span<const std::uint8_t> d) {
+    auto self = weak.lock();
+    if (self && !self->closed_) self->deliverDatagram(d);
+  };
+  netsim_ =
+      std::make_shared<NetSim>(strand_, spec, seed, std::move(to_server), std::move(to_program));
+  spdlog::info("'{}': simulating the network: {}", settings_.name, describeNetSim(spec));
 }
 
 void NetDriver::armTimer() {

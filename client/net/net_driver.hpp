@@ -40,6 +40,7 @@
 #include "client/net/asio.hpp"
 #include "client/net/client_session.hpp"
 #include "client/net/join_backoff.hpp"
+#include "client/net/net_sim.hpp"
 
 namespace vistel::net {
 
@@ -97,6 +98,11 @@ class NetDriver : public std::enable_shared_from_this<NetDriver> {
   // the local network. Nothing happens when not connected.
   void reopenDatagramSocket();
 
+  // Puts a network simulator (net_sim.hpp) between this driver's UDP socket and the
+  // session, both ways as the spec says; its seed mixes in the participant's name. Call
+  // before start(). An inactive spec removes it.
+  void setNetSim(const NetSimSpec& spec);
+
  private:
   NetDriver(asio::io_context& io, ServerAddress server, SessionSettings settings,
             std::shared_ptr<AvatarCache> cache, const BackoffSettings& backoff);
@@ -114,6 +120,8 @@ class NetDriver : public std::enable_shared_from_this<NetDriver> {
   void writeStream();
   void readStream();
   void readDatagram();
+  // A datagram from the server (strand): to the session (from the socket or the simulator).
+  void deliverDatagram(std::span<const std::uint8_t> datagram);
   void armTimer();
   void fail(const std::string& reason);
   void closeSockets();
@@ -156,6 +164,7 @@ class NetDriver : public std::enable_shared_from_this<NetDriver> {
   std::uint64_t udp_generation_ = 0;    // bumped per UDP socket (stale reads stop)
   std::vector<std::uint8_t> read_buffer_;
   std::vector<std::uint8_t> datagram_buffer_;
+  std::shared_ptr<NetSim> netsim_;  // null: no simulation (setNetSim)
 };
 
 }  // namespace vistel::net
