@@ -125,6 +125,30 @@ bool collisionShaped(const DeformFrame& fr, std::uint32_t v) {
   return false;
 }
 
+namespace {
+
+// Whether moving vertex v to p would turn one of its faces inside out against the skinned
+// skin (rigid positions) that is not turned now.
+bool turnsAFace(const DeformFrame& fr, std::uint32_t v, const glm::vec3& p) {
+  const DeformScratch& sc = *fr.sc;
+  const auto rigid = fr.in->rigid_positions;
+  const auto& pos = fr.st->positions;
+  for (std::uint32_t k = sc.vf_offsets[v]; k < sc.vf_offsets[v + 1]; ++k) {
+    const std::uint32_t* f = &sc.face_vertices[3 * static_cast<std::size_t>(sc.vf_faces[k])];
+    const glm::vec3 nr = glm::cross(rigid[f[1]] - rigid[f[0]], rigid[f[2]] - rigid[f[0]]);
+    const glm::vec3 now = glm::cross(pos[f[1]] - pos[f[0]], pos[f[2]] - pos[f[0]]);
+    glm::vec3 q[3] = {pos[f[0]], pos[f[1]], pos[f[2]]};
+    for (int i = 0; i < 3; ++i) {
+      if (f[i] == v) q[i] = p;
+    }
+    const glm::vec3 moved = glm::cross(q[1] - q[0], q[2] - q[0]);
+    if (glm::dot(nr, moved) <= 0.0f && glm::dot(nr, now) > 0.0f) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 // The last part of Step 2: smooths the corrections c = P' - P of the joint regions (see
 // the header and DeformOptions::smooth_passes). The vertices smoothed are those of the pool
 // (joint vertices and the free ones beside them) that no collision term shaped (see
@@ -143,7 +167,9 @@ int smoothCorrections(DeformFrame& fr) {
   };
   sc.smooth_list.clear();
   for (const std::uint32_t v : sc.smooth_pool) {
-    if (collisionShaped(fr, v)) continue;
+    // A vertex whose own field is wholly faded keeps its skinned surface: its correction
+    // is not the joint region's to smooth (dragged to its neighbours' it folds thin faces).
+    if (collisionShaped(fr, v) || skinnedShare(fr, v) >= 1.0f) continue;
     bool active = moved(v);
     for (std::uint32_t k = cal.ring_offsets[v]; k < cal.ring_offsets[v + 1] && !active; ++k) {
       active = moved(cal.ring[k]);
@@ -172,6 +198,9 @@ int smoothCorrections(DeformFrame& fr) {
     const glm::vec3 c = sc.correction[v];
     const glm::vec3 p = rigid[v] + c;
     if (p == st.positions[v]) continue;
+    // Smoothing evens out the skin; where it would turn a face inside out (a small face
+    // between a vertex that moved and one that did not), the vertex keeps its solution.
+    if (turnsAFace(fr, v, p)) continue;
     st.positions[v] = p;
     ++count;
     std::uint8_t& flags = st.flags[v];

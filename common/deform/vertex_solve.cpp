@@ -102,17 +102,6 @@ bool lineExit(const PosedPrimitive& prim, float rho, const glm::vec3& p, const g
   return true;
 }
 
-// The share of vertex vi's own-field surface that is faded into its skinned position
-// (DeformOptions::own_fade_low): 0 where its own primitives' bones carry enough of its skin
-// weight (and for models without Calibration::own_weight), 1 where they carry too little.
-float skinnedShare(const DeformFrame& fr, std::size_t vi) {
-  const std::vector<float>& own = fr.model->calibration.own_weight;
-  const float lo = fr.opt->own_fade_low, hi = fr.opt->own_fade_high;
-  if (own.empty() || !(hi > 0.0f) || own[vi] >= hi) return 0.0f;
-  if (own[vi] <= lo || !(hi > lo)) return 1.0f;
-  return (hi - own[vi]) / (hi - lo);
-}
-
 // Fills vp's own part for vertex v (no candidates).
 void gatherOwn(const DeformFrame& fr, int v, VertexProblem& vp) {
   const ImplicitModel& m = *fr.model;
@@ -381,6 +370,14 @@ inline float writeSolved(const DeformFrame& fr, int v, const glm::vec3& p0, cons
 // elastic memory this frame and is projected along its normal, as it was last frame (see
 // solveLoneLimb). Its part that never changes (DeformScratch::lone_kind); passSolve tests the
 // rest.
+float skinnedShare(const DeformFrame& fr, std::size_t vi) {
+  const std::vector<float>& own = fr.model->calibration.own_weight;
+  const float lo = fr.opt->own_fade_low, hi = fr.opt->own_fade_high;
+  if (own.empty() || !(hi > 0.0f) || own[vi] >= hi) return 0.0f;
+  if (own[vi] <= lo || !(hi > lo)) return 1.0f;
+  return (hi - own[vi]) / (hi - lo);
+}
+
 bool loneKind(const Calibration& cal, std::size_t vi, bool fixed) {
   const auto& pr = cal.prims[vi];
   return !fixed && cal.vertex_class[vi] == VertexClass::kLimb && pr[3] < 0 && pr[0] >= 0;

@@ -241,6 +241,12 @@ float moveAllowance(const DeformFrame& fr, std::size_t vi, bool bulging);
 // solve bounded). O(nvert) flag tests.
 void boundRelaxedMoves(DeformFrame& fr);
 
+// The share of vertex vi's own-field surface that is faded into its skinned position
+// (DeformOptions::own_fade_low): 0 where the bones its own field models carry enough of its
+// skin weight (and for models without Calibration::own_weight), 1 where they carry too
+// little, linear between.
+float skinnedShare(const DeformFrame& fr, std::size_t vi);
+
 // Whether vertex vi is a lone limb vertex: a limb vertex of one primitive (no bone), not fixed
 // (the part of the short way's test that never changes; init time).
 bool loneKind(const Calibration& cal, std::size_t vi, bool fixed);
