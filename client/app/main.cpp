@@ -73,6 +73,7 @@
 #include "client/net/net_driver.hpp"
 #include "client/net/playback_stats.hpp"
 #include "client/net/prop_models.hpp"
+#include "client/net/remote_jitter.hpp"
 #include "client/view/room_view.hpp"
 #include "common/avatar/avatar_io.hpp"
 #include "common/base/file.hpp"
@@ -144,6 +145,7 @@ struct FrameMember {
   bool is_self = false;
   bool has_posture = false;
   Posture posture;
+  double shown_time = 0.0;  // the playback time it was sampled at (server clock)
 };
 
 // Per-frame figures of the rendered frames, summarised for --stats-json.
@@ -455,6 +457,9 @@ int main(int argc, char** argv) {
   }
   FrameFigures figures;
   PlaybackStats playback;  // how each remote member was shown
+  // The jitter drawn against sent, for --stats-json only (forward kinematics per member).
+  std::unique_ptr<RemoteJitter> remote_jitter;
+  if (!stats_path.empty()) remote_jitter = std::make_unique<RemoteJitter>();
   ServerInteractions server_lists;
   InteractionList received_list;
   std::unordered_map<std::string, std::shared_ptr<const AvatarModel>> models;
@@ -489,7 +494,9 @@ int main(int argc, char** argv) {
           const JitterBuffer::Shown shown =
               m.buffer.sampleShown(play_time, config->max_extrapolation_s, f.posture, &captured);
           f.has_posture = shown != JitterBuffer::Shown::kNone;
+          f.shown_time = play_time;
           if (s.state() == SessionState::kLive) playback.add(m.name, shown, server_now - captured);
+          if (remote_jitter) remote_jitter->collect(m);
         }
       }
       props.clear();
@@ -501,6 +508,14 @@ int main(int argc, char** argv) {
       }
       return 0;
     });
+    if (remote_jitter) {
+      for (const FrameMember& f : members) {
+        if (f.is_self || !f.has_posture) continue;
+        if (auto model = cache->find(f.avatar_hash)) {
+          remote_jitter->measure(f.id, f.name, model->skeleton, f.shown_time, f.posture, playback);
+        }
+      }
+    }
     // Draw (the view skins every avatar in its worker pool).
     if (view) {
       const Clock::time_point frame_start = Clock::now();

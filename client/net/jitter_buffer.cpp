@@ -4,6 +4,56 @@
 #include <cassert>
 
 namespace vistel::net {
+namespace {
+
+// Cubic Hermite interpolation at t between postures a and b (times ascending), with the
+// tangents of a non-uniform Catmull-Rom spline from their neighbours p (before a) and n
+// (after b) where present, else the chord's (so the motion's velocity is continuous across
+// every key, and at the newest key it matches the linear extrapolation beyond). Rotations:
+// the same on the quaternions' components (signs aligned along the chain), normalised.
+// out.rotations is resized to a's joint count; every posture given has that count.
+void hermitePostures(const Posture* p, const Posture& a, const Posture& b, const Posture* n,
+                     double t, Posture& out) {
+  const double span = b.time - a.time;
+  const double s = span > 0.0 ? std::clamp((t - a.time) / span, 0.0, 1.0) : 1.0;
+  const double s2 = s * s, s3 = s2 * s;
+  const auto h00 = static_cast<float>(2.0 * s3 - 3.0 * s2 + 1.0);
+  const auto h10 = static_cast<float>((s3 - 2.0 * s2 + s) * span);
+  const auto h01 = static_cast<float>(-2.0 * s3 + 3.0 * s2);
+  const auto h11 = static_cast<float>((s3 - s2) * span);
+  const float chord = span > 0.0 ? static_cast<float>(1.0 / span) : 0.0f;
+  const float before = p != nullptr ? static_cast<float>(1.0 / (b.time - p->time)) : 0.0f;
+  const float after = n != nullptr ? static_cast<float>(1.0 / (n->time - a.time)) : 0.0f;
+  const auto cubic = [&](const glm::vec4& vp, const glm::vec4& va, const glm::vec4& vb,
+                         const glm::vec4& vn) {
+    const glm::vec4 ma = p != nullptr ? (vb - vp) * before : (vb - va) * chord;
+    const glm::vec4 mb = n != nullptr ? (vn - va) * after : (vb - va) * chord;
+    return h00 * va + h10 * ma + h01 * vb + h11 * mb;
+  };
+  const glm::vec3 rp = p != nullptr ? p->root_translation : a.root_translation;
+  const glm::vec3 rn = n != nullptr ? n->root_translation : b.root_translation;
+  out.root_translation = glm::vec3(cubic(glm::vec4(rp, 0.0f), glm::vec4(a.root_translation, 0.0f),
+                                         glm::vec4(b.root_translation, 0.0f), glm::vec4(rn, 0.0f)));
+  const std::size_t nj = a.rotations.size();
+  out.rotations.resize(nj);
+  const auto vec = [](const glm::quat& q) { return glm::vec4(q.x, q.y, q.z, q.w); };
+  for (std::size_t j = 0; j < nj; ++j) {
+    const glm::vec4 qa = vec(a.rotations[j]);
+    glm::vec4 qb = vec(b.rotations[j]);
+    if (glm::dot(qa, qb) < 0.0f) qb = -qb;
+    glm::vec4 qp = p != nullptr ? vec(p->rotations[j]) : qa;
+    if (glm::dot(qp, qa) < 0.0f) qp = -qp;
+    glm::vec4 qn = n != nullptr ? vec(n->rotations[j]) : qb;
+    if (glm::dot(qn, qb) < 0.0f) qn = -qn;
+    const glm::vec4 q = cubic(qp, qa, qb, qn);
+    const float len = glm::length(q);
+    out.rotations[j] =
+        len > 0.0f ? glm::quat(q.w / len, q.x / len, q.y / len, q.z / len) : a.rotations[j];
+  }
+  out.time = t;
+}
+
+}  // namespace
 
 JitterBuffer::JitterBuffer(int capacity) : entries_(static_cast<std::size_t>(capacity)) {
   assert(capacity >= 2);
@@ -105,9 +155,13 @@ JitterBuffer::Shown JitterBuffer::sampleShown(double t, double max_extrapolation
     copy(b);
     return kind;
   }
-  const double span = b.time - a.time;
-  const float alpha = span > 0.0 ? static_cast<float>((t - a.time) / span) : 1.0f;
-  blendPostures(a, b, alpha, out);
+  const auto fits = [&](int k) {
+    return k >= 0 && k < count_ &&
+           entries_[static_cast<std::size_t>(k)].posture.rotations.size() == a.rotations.size();
+  };
+  const Posture* p = fits(i - 2) ? &entries_[static_cast<std::size_t>(i - 2)].posture : nullptr;
+  const Posture* n = fits(i + 1) ? &entries_[static_cast<std::size_t>(i + 1)].posture : nullptr;
+  hermitePostures(p, a, b, n, t, out);
   out.translations.clear();
   return kind;
 }
@@ -116,6 +170,14 @@ double JitterBuffer::oldestTime() const { return count_ > 0 ? entries_[0].postur
 
 double JitterBuffer::newestTime() const {
   return count_ > 0 ? entries_[static_cast<std::size_t>(count_ - 1)].posture.time : 0.0;
+}
+
+const Posture* JitterBuffer::firstAfter(double t) const {
+  for (int i = 0; i < count_; ++i) {
+    const Posture& p = entries_[static_cast<std::size_t>(i)].posture;
+    if (p.time > t) return &p;
+  }
+  return nullptr;
 }
 
 }  // namespace vistel::net

@@ -1,7 +1,9 @@
 // A jitter buffer for one remote member's postures (DESIGN.md §6: clients interpolate
 // with a small jitter buffer). Postures arrive out of order, duplicated or not at all;
 // the buffer keeps the newest `capacity` distinct ones in capture-time order and
-// answers "the posture at time t" by interpolating the two around t. The caller plays
+// answers "the posture at time t" by interpolating the two around t along a cubic through
+// their neighbours (a blend of the two alone kinks the motion at every received posture,
+// which a viewer sees as shake: remote_jitter.hpp measures it). The caller plays
 // back a little behind the newest arrival (SessionSettings::interpolation_delay_s) so
 // that late packets still fit in.
 //
@@ -28,7 +30,8 @@ class JitterBuffer {
   // Inserts a posture (its time: capture time, server clock) under its sequence number.
   Push push(std::uint16_t sequence, const Posture& posture);
 
-  // The posture at server time t: spherical blend of the two buffered postures around t,
+  // The posture at server time t: cubic Hermite interpolation of the two buffered postures
+  // around t (Catmull-Rom tangents from their neighbours; quaternion components, normalised),
   // the oldest one before the first, the newest after the last (held, not
   // extrapolated). False when empty. out.time = t clamped to the buffered span.
   bool sample(double t, Posture& out) const;
@@ -58,6 +61,8 @@ class JitterBuffer {
   bool empty() const { return count_ == 0; }
   double oldestTime() const;
   double newestTime() const;
+  // The oldest buffered posture captured after t (server clock), or null.
+  const Posture* firstAfter(double t) const;
   void clear() { count_ = 0; }
 
  private:

@@ -26,15 +26,22 @@ double binValue(std::size_t i) {
 }
 
 nlohmann::json figuresJson(const ShownFigures& f) {
-  return {{"frames", f.frames()},
-          {"interpolated", f.interpolated},
-          {"held", f.held},
-          {"extrapolated", f.extrapolated},
-          {"age_ms",
-           {{"p50", f.age_ms.percentile(50.0)},
-            {"p99", f.age_ms.percentile(99.0)},
-            {"mean", f.age_ms.mean()},
-            {"max", f.age_ms.max()}}}};
+  nlohmann::json doc = {{"frames", f.frames()},
+                        {"interpolated", f.interpolated},
+                        {"held", f.held},
+                        {"extrapolated", f.extrapolated},
+                        {"age_ms",
+                         {{"p50", f.age_ms.percentile(50.0)},
+                          {"p99", f.age_ms.percentile(99.0)},
+                          {"mean", f.age_ms.mean()},
+                          {"max", f.age_ms.max()}}}};
+  if (f.drawn_jerk.count() > 0 && f.sent_jerk.count() > 0) {
+    const double sent = f.sent_jerk.mean();
+    doc["jerk"] = {{"drawn", f.drawn_jerk.mean()},
+                   {"sent", sent},
+                   {"ratio", sent > 0.0 ? f.drawn_jerk.mean() / sent : 0.0}};
+  }
+  return doc;
 }
 
 }  // namespace
@@ -90,6 +97,8 @@ void ShownFigures::merge(const ShownFigures& other) {
   held += other.held;
   extrapolated += other.extrapolated;
   age_ms.merge(other.age_ms);
+  drawn_jerk.merge(other.drawn_jerk);
+  sent_jerk.merge(other.sent_jerk);
 }
 
 void PlaybackStats::add(const std::string& member, JitterBuffer::Shown kind, double age_s) {
@@ -98,6 +107,22 @@ void PlaybackStats::add(const std::string& member, JitterBuffer::Shown kind, dou
   auto it = members_.find(member);
   if (it == members_.end()) it = members_.emplace(member, ShownFigures{}).first;
   it->second.add(kind, age_s);
+}
+
+void PlaybackStats::addDrawn(const std::string& member, double t,
+                             std::span<const glm::vec3> joints) {
+  auto it = members_.find(member);
+  if (it == members_.end()) it = members_.emplace(member, ShownFigures{}).first;
+  const double jerk = it->second.drawn_jerk.add(t, joints);
+  if (jerk >= 0.0) total_.drawn_jerk.addValue(jerk);
+}
+
+void PlaybackStats::addSent(const std::string& member, double t,
+                            std::span<const glm::vec3> joints) {
+  auto it = members_.find(member);
+  if (it == members_.end()) it = members_.emplace(member, ShownFigures{}).first;
+  const double jerk = it->second.sent_jerk.add(t, joints);
+  if (jerk >= 0.0) total_.sent_jerk.addValue(jerk);
 }
 
 void PlaybackStats::merge(const PlaybackStats& other) {

@@ -17,6 +17,7 @@
 #include <string>
 
 #include "client/net/jitter_buffer.hpp"
+#include "client/net/motion_jerk.hpp"
 
 namespace vistel::net {
 
@@ -45,6 +46,11 @@ struct ShownFigures {
   std::uint64_t held = 0;
   std::uint64_t extrapolated = 0;
   AgeHistogram age_ms;
+  // Jitter (issue 21): the jerk of the joint positions drawn (at the playback times) and of
+  // those the member sent (at their capture times); drawn / sent near 1 when the viewer's
+  // interpolation and extrapolation add none of their own.
+  MotionJerk drawn_jerk;
+  MotionJerk sent_jerk;
   std::uint64_t frames() const { return interpolated + held + extrapolated; }
   void add(JitterBuffer::Shown kind, double age_s);
   void merge(const ShownFigures& other);
@@ -54,6 +60,10 @@ class PlaybackStats {
  public:
   // A shown frame of a member (kNone is not counted): into its figures and the total.
   void add(const std::string& member, JitterBuffer::Shown kind, double age_s);
+  // A member's joint positions (model space, metres) as drawn at playback time t, and as it
+  // sent them (captured at t): into its jerk streams, and the values into the total.
+  void addDrawn(const std::string& member, double t, std::span<const glm::vec3> joints);
+  void addSent(const std::string& member, double t, std::span<const glm::vec3> joints);
   // Into the total only (callers that keep no per-member figures, e.g. bots).
   void add(JitterBuffer::Shown kind, double age_s) { total_.add(kind, age_s); }
   void merge(const PlaybackStats& other);
@@ -68,6 +78,7 @@ class PlaybackStats {
 
 // {"frames": n, "interpolated": n, "held": n, "extrapolated": n,
 //  "age_ms": {"p50": f, "p99": f, "mean": f, "max": f},
+//  "jerk": {"drawn": f, "sent": f, "ratio": f},   (m/s^3; only where both were measured)
 //  "members": {"<name>": {the same without "members"}}}   ("members" only when kept)
 std::string playbackJson(const PlaybackStats& stats);
 // One line for logs: "1234 frames: 98.1% interpolated, 12 held, 9 extrapolated; age p50
