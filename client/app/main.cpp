@@ -1,6 +1,7 @@
 // vistel-client: the site client (DESIGN.md §1, §6).
 //
-//   vistel-client --server HOST:PORT --room R --name N [--avatar FILE] [--source bvh:FILE]
+//   vistel-client --server HOST:PORT --room R --name N [--token T] [--avatar FILE]
+//                 [--tls [--tls-ca FILE | --tls-pin SHA256]] [--source bvh:FILE]
 //                 [--headless] [--duration S] [--screenshot FILE] [--stats-json FILE]
 //                 [--stereo off|side-by-side|anaglyph] [--view room|first-person]
 //                 [--frames DIR [--frames-every N]] [--config FILE] [--ball] [--rigid-only]
@@ -225,7 +226,20 @@ int main(int argc, char** argv) {
   app.add_option("--server", server_text, "session server HOST:PORT")->required();
   app.add_option("--room", room, "room to join")->required();
   app.add_option("--name", name, "participant name")->required();
+  std::string token;
+  app.add_option("--token", token,
+                 "join token for this room and name (`vistel-server token`), for a server that "
+                 "requires one");
   app.add_option("--avatar", avatar_path, "avatar file (.vavatar; default: the data folder's)");
+  tls::ClientTlsSettings tls_settings;
+  app.add_flag("--tls", tls_settings.enabled,
+               "the control channel over TLS (a server started with --tls-cert)");
+  app.add_option("--tls-ca", tls_settings.ca_file,
+                 "with --tls: trust the server's certificate if this CA file (PEM) signed it "
+                 "(default: the system's CAs)");
+  app.add_option("--tls-pin", tls_settings.pin_sha256,
+                 "with --tls: trust only the certificate with this SHA-256 (64 hex digits of its "
+                 "DER form)");
   app.add_option("--source", source_text,
                  "own posture source: bvh:FILE, sim:CLIP.bvh (simulated sensor rig) or "
                  "recording:FILE.vrec (default: rest posture)");
@@ -283,6 +297,17 @@ int main(int argc, char** argv) {
                  "vistel-client: --screenshot and --frames need rendering (drop "
                  "--headless)\n");
     return 2;
+  }
+  if (!tls_settings.enabled &&
+      (!tls_settings.ca_file.empty() || !tls_settings.pin_sha256.empty())) {
+    std::fprintf(stderr, "vistel-client: --tls-ca and --tls-pin need --tls\n");
+    return 2;
+  }
+  if (tls_settings.enabled) {
+    if (auto context = tls::makeClientContext(tls_settings); !context) {
+      std::fprintf(stderr, "vistel-client: %s\n", context.error().message.c_str());
+      return 2;
+    }
   }
   if (!screenshot.empty() && duration == 0.0) duration = 3.0;
   const Result<std::string> sensor_spec = sensorSpec(sensor_args, source_text);
@@ -412,13 +437,14 @@ int main(int argc, char** argv) {
   SessionSettings settings = config->session;
   settings.room = room;
   settings.name = name;
+  settings.token = token;
   settings.avatar_hash = own_hash;
   settings.avatar_bytes =
       std::make_shared<const std::vector<std::uint8_t>>(std::move(*avatar_bytes));
   settings.avatar_joint_count = own_skeleton.jointCount();
   asio::io_context io;
   auto work = asio::make_work_guard(io);
-  auto driver = NetDriver::create(io, *server, settings, cache);
+  auto driver = NetDriver::create(io, *server, settings, cache, {}, tls_settings);
   driver->setNetSim(*netsim);
   driver->start();
   std::thread network([&io] { io.run(); });

@@ -4,7 +4,8 @@
 //
 //   vistel-bot --server HOST:PORT --room R --name N (--bvh FILE | --recording FILE)
 //              [--avatar FILE] [--loop] [--duration S] [--count K] [--config FILE]
-//              [--stats-json FILE] [--log-level LEVEL] [--netsim SPEC]
+//              [--stats-json FILE] [--log-level LEVEL] [--netsim SPEC] [--token T ...]
+//              [--tls [--tls-ca FILE | --tls-pin SHA256]]
 //   vistel-bot --version
 //
 // K participants (named N-1 .. N-K when K > 1, else N) join room R, each with the avatar
@@ -22,6 +23,8 @@
 // blending) and counts frames interpolated, held and extrapolated and the shown age.
 // --netsim SPEC (or [network] netsim) puts a simulated bad network between each
 // participant and the server on UDP (client/net/net_sim.hpp), seeded per participant.
+// --token: the join token(s) for a server that requires them (`vistel-server token`), one
+// per participant in name order (a token admits one name).
 // Never initialises GLFW. Exit status: 0, 1 on an error (a participant the server refused
 // or dropped included: the refusal is printed), 2 on bad usage (an unknown --log-level too).
 
@@ -77,10 +80,23 @@ int main(int argc, char** argv) {
   app.add_option("--server", server_text, "session server HOST:PORT")->required();
   app.add_option("--room", room, "room to join")->required();
   app.add_option("--name", name, "participant name (N-1..N-K with --count K > 1)")->required();
+  std::vector<std::string> tokens;
+  app.add_option("--token", tokens,
+                 "join token (`vistel-server token`) for a server that requires one; with "
+                 "--count K give K, for N-1..N-K in order");
   auto* bvh_opt = app.add_option("--bvh", bvh_path, "BVH motion clip to replay");
   auto* rec_opt = app.add_option("--recording", recording_path, ".vrec sensor recording to replay");
   bvh_opt->excludes(rec_opt);
   app.add_option("--avatar", avatar_path, "avatar file (.vavatar; default: the data folder's)");
+  tls::ClientTlsSettings tls_settings;
+  app.add_flag("--tls", tls_settings.enabled,
+               "the control channel over TLS (a server started with --tls-cert)");
+  app.add_option("--tls-ca", tls_settings.ca_file,
+                 "with --tls: trust the server's certificate if this CA file (PEM) signed it "
+                 "(default: the system's CAs)");
+  app.add_option("--tls-pin", tls_settings.pin_sha256,
+                 "with --tls: trust only the certificate with this SHA-256 (64 hex digits of its "
+                 "DER form)");
   app.add_flag("--loop", loop, "replay the clip endlessly");
   app.add_option("--duration", duration, "stop after this many seconds")
       ->check(CLI::NonNegativeNumber);
@@ -109,6 +125,22 @@ int main(int argc, char** argv) {
   }
   spdlog::set_level(spdlog::level::from_str(log_level));
 
+  if (!tokens.empty() && static_cast<int>(tokens.size()) != count) {
+    std::fprintf(stderr, "vistel-bot: %zu --token for %d participant(s): give one each\n",
+                 tokens.size(), count);
+    return 2;
+  }
+  if (!tls_settings.enabled &&
+      (!tls_settings.ca_file.empty() || !tls_settings.pin_sha256.empty())) {
+    std::fprintf(stderr, "vistel-bot: --tls-ca and --tls-pin need --tls\n");
+    return 2;
+  }
+  if (tls_settings.enabled) {
+    if (auto context = tls::makeClientContext(tls_settings); !context) {
+      std::fprintf(stderr, "vistel-bot: %s\n", context.error().message.c_str());
+      return 2;
+    }
+  }
   if (bvh_opt->count() == 0 && rec_opt->count() == 0) {
     std::fprintf(stderr, "vistel-bot: give a source: --bvh FILE or --recording FILE\n");
     return 2;
@@ -203,7 +235,8 @@ int main(int argc, char** argv) {
   for (int i = 0; i < count; ++i) {
     settings.name = count > 1 ? name + "-" + std::to_string(i + 1) : name;
     names.push_back(settings.name);
-    drivers.push_back(NetDriver::create(io, *server, settings, nullptr));
+    if (!tokens.empty()) settings.token = tokens[static_cast<std::size_t>(i)];
+    drivers.push_back(NetDriver::create(io, *server, settings, nullptr, {}, tls_settings));
     drivers.back()->setNetSim(*netsim);
     drivers.back()->start();
   }

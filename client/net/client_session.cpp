@@ -82,6 +82,7 @@ void ClientSession::start(double now) {
   join.set_protocol_version(kProtocolVersion);
   join.set_room(settings_.room);
   join.set_name(settings_.name);
+  if (!settings_.token.empty()) join.set_token(settings_.token);
   join.set_avatar_hash(settings_.avatar_hash);
   join.set_avatar_size(settings_.avatar_bytes ? settings_.avatar_bytes->size() : 0);
   if (settings_.resume_member_id != 0) {

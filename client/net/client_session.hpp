@@ -62,6 +62,7 @@ inline constexpr std::uint32_t kProtocolVersion = 3;
 struct SessionSettings {
   std::string room;
   std::string name;
+  std::string token;  // Join.token (`vistel-server token`); empty: none sent
   // The participant's avatar file and its hash (avatarContentHash); its joint count is
   // what every posture sent must carry (0 = not checked here).
   std::shared_ptr<const std::vector<std::uint8_t>> avatar_bytes;

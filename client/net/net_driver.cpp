@@ -61,18 +61,20 @@ double monotonicSeconds() {
 std::shared_ptr<NetDriver> NetDriver::create(asio::io_context& io, ServerAddress server,
                                              SessionSettings settings,
                                              std::shared_ptr<AvatarCache> cache,
-                                             const BackoffSettings& backoff) {
+                                             const BackoffSettings& backoff,
+                                             const tls::ClientTlsSettings& tls) {
   return std::shared_ptr<NetDriver>(
-      new NetDriver(io, std::move(server), std::move(settings), std::move(cache), backoff));
+      new NetDriver(io, std::move(server), std::move(settings), std::move(cache), backoff, tls));
 }
 
 NetDriver::NetDriver(asio::io_context& io, ServerAddress server, SessionSettings settings,
-                     std::shared_ptr<AvatarCache> cache, const BackoffSettings& backoff)
+                     std::shared_ptr<AvatarCache> cache, const BackoffSettings& backoff,
+                     const tls::ClientTlsSettings& tls)
     : io_(io),
       strand_(asio::make_strand(io)),
       server_(std::move(server)),
       resolver_(strand_),
-      tcp_(strand_),
+      tcp_(asio::ip::tcp::socket(strand_)),
       udp_(strand_),
       timer_(strand_),
       settings_(std::move(settings)),
@@ -82,8 +84,17 @@ NetDriver::NetDriver(asio::io_context& io, ServerAddress server, SessionSettings
       reconnect_backoff_(reconnectBackoff(backoff), backoffSeed(settings_.name, 1)),
       retry_timer_(strand_),
       read_buffer_(16u << 10),
-      datagram_buffer_(65536) {
+      datagram_buffer_(65536),
+      tls_(tls) {
   (void)monotonicSeconds();
+  if (tls_.enabled) {
+    auto context = tls::makeClientContext(tls_);
+    if (context) {
+      tls_context_ = std::move(*context);
+    } else {
+      tls_error_ = context.error().message;
+    }
+  }
 }
 
 NetDriver::~NetDriver() = default;
@@ -233,7 +244,14 @@ void NetDriver::connect() {
   writing_ = false;
   close_after_write_ = false;
   write_queue_.clear();
-  tcp_ = asio::ip::tcp::socket(strand_);
+  tcp_ = tls_context_ ? tls::ControlStream(asio::ip::tcp::socket(strand_), *tls_context_)
+                      : tls::ControlStream(asio::ip::tcp::socket(strand_));
+  tls_handshaken_ = false;
+  stream_answered_ = false;
+  if (tls_.enabled && !tls_context_) {
+    fail("TLS: " + tls_error_);
+    return;
+  }
   udp_ = asio::ip::udp::socket(strand_);
   auto self = shared_from_this();
   auto on_resolved = [this, self](const boost::system::error_code& ec,
@@ -251,14 +269,48 @@ void NetDriver::connect() {
       }
       onConnected(endpoint);
     };
-    asio::async_connect(tcp_, results, std::move(on_connect));
+    asio::async_connect(tcp_.socket(), results, std::move(on_connect));
   };
   resolver_.async_resolve(server_.host, std::to_string(server_.port), std::move(on_resolved));
 }
 
 void NetDriver::onConnected(const asio::ip::tcp::endpoint& endpoint) {
   boost::system::error_code e;
-  tcp_.set_option(asio::ip::tcp::no_delay(true), e);
+  tcp_.socket().set_option(asio::ip::tcp::no_delay(true), e);
+  // TLS: the handshake first (then here again).
+  if (tcp_.isTls() && !tls_handshaken_) {
+    tls_note_->clear();
+    if (Status st = tls::prepareClientStream(tcp_, tls_, server_.host, tls_note_); !st) {
+      fail(st.error().message);
+      return;
+    }
+    // A server that never answers the handshake: given up after the join timeout (the
+    // retry timer is idle while a connection is being made).
+    retry_timer_.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+        std::chrono::duration<double>(settings_.join_timeout_s)));
+    spdlog::debug("'{}': TLS handshake with {}:{}", settings_.name, server_.host, server_.port);
+    retry_timer_.async_wait([this, self = shared_from_this()](const boost::system::error_code& ec) {
+      if (ec || closed_ || tls_handshaken_) return;
+      *tls_note_ =
+          "no answer in " + std::to_string(static_cast<int>(settings_.join_timeout_s)) + " s";
+      tcp_.close();
+    });
+    tcp_.asyncHandshake(asio::ssl::stream_base::client, [this, self = shared_from_this(), endpoint](
+                                                            const boost::system::error_code& hec) {
+      retry_timer_.cancel();
+      if (closed_) return;
+      if (hec) {
+        fail("TLS handshake with " + server_.host + ":" + std::to_string(server_.port) +
+             " failed: " + tls::describeTlsError(hec) +
+             (tls_note_->empty() ? std::string(" (a server without TLS?)")
+                                 : " (" + *tls_note_ + ")"));
+        return;
+      }
+      tls_handshaken_ = true;
+      onConnected(endpoint);
+    });
+    return;
+  }
   // UDP to the same address and port, connected (only its datagrams arrive).
   udp_server_ = asio::ip::udp::endpoint(endpoint.address(), endpoint.port());
   udp_.open(udp_server_.protocol(), e);
@@ -366,8 +418,7 @@ void NetDriver::closeSockets() {
   boost::system::error_code ignored;
   timer_.cancel();
   if (netsim_) netsim_->clear();  // what was in flight went with the sockets
-  tcp_.shutdown(asio::ip::tcp::socket::shutdown_both, ignored);
-  tcp_.close(ignored);
+  tcp_.close();
   udp_.close(ignored);
   maybeRejoin();
 }
@@ -420,8 +471,8 @@ void NetDriver::writeStream() {
     return;
   }
   writing_ = true;
-  asio::async_write(
-      tcp_, asio::buffer(write_queue_.front()),
+  tcp_.asyncWrite(
+      asio::buffer(write_queue_.front()),
       [this, self = shared_from_this()](const boost::system::error_code& ec, std::size_t) {
         writing_ = false;
         if (closed_) return;
@@ -435,14 +486,20 @@ void NetDriver::writeStream() {
 }
 
 void NetDriver::readStream() {
-  tcp_.async_read_some(
+  tcp_.asyncReadSome(
       asio::buffer(read_buffer_),
       [this, self = shared_from_this()](const boost::system::error_code& ec, std::size_t n) {
         if (closed_) return;
         if (ec) {
-          fail(ec == asio::error::eof ? "the server closed the connection" : ec.message());
+          std::string why =
+              ec == asio::error::eof ? "the server closed the connection" : ec.message();
+          // A TLS server drops a plain client's first bytes without an answer.
+          if (!stream_answered_ && !tcp_.isTls())
+            why += " without answering (a TLS server? try --tls)";
+          fail(why);
           return;
         }
+        stream_answered_ = true;
         {
           std::lock_guard lock(mutex_);
           session_->onStreamBytes(std::span(read_buffer_.data(), n), monotonicSeconds());

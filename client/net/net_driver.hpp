@@ -41,6 +41,7 @@
 #include "client/net/client_session.hpp"
 #include "client/net/join_backoff.hpp"
 #include "client/net/net_sim.hpp"
+#include "common/tls/tls_context.hpp"
 
 namespace vistel::net {
 
@@ -62,7 +63,8 @@ class NetDriver : public std::enable_shared_from_this<NetDriver> {
   static std::shared_ptr<NetDriver> create(asio::io_context& io, ServerAddress server,
                                            SessionSettings settings,
                                            std::shared_ptr<AvatarCache> cache,
-                                           const BackoffSettings& backoff = {});
+                                           const BackoffSettings& backoff = {},
+                                           const tls::ClientTlsSettings& tls = {});
   ~NetDriver();
 
   // Resolves, connects, joins (asynchronously). Then the session runs by itself.
@@ -105,7 +107,8 @@ class NetDriver : public std::enable_shared_from_this<NetDriver> {
 
  private:
   NetDriver(asio::io_context& io, ServerAddress server, SessionSettings settings,
-            std::shared_ptr<AvatarCache> cache, const BackoffSettings& backoff);
+            std::shared_ptr<AvatarCache> cache, const BackoffSettings& backoff,
+            const tls::ClientTlsSettings& tls);
   // Resolves and connects (strand), then starts the session.
   void connect();
   // The TCP connection is up (strand): UDP opened toward the same endpoint, session started.
@@ -130,7 +133,7 @@ class NetDriver : public std::enable_shared_from_this<NetDriver> {
   asio::strand<asio::io_context::executor_type> strand_;
   ServerAddress server_;
   asio::ip::tcp::resolver resolver_;
-  asio::ip::tcp::socket tcp_;
+  tls::ControlStream tcp_;  // the control connection: plain TCP, or TLS (server_.tls)
   asio::ip::udp::socket udp_;
   asio::steady_timer timer_;
 
@@ -165,6 +168,13 @@ class NetDriver : public std::enable_shared_from_this<NetDriver> {
   std::vector<std::uint8_t> read_buffer_;
   std::vector<std::uint8_t> datagram_buffer_;
   std::shared_ptr<NetSim> netsim_;  // null: no simulation (setNetSim)
+  // TLS (strand only): the context (or why there is none), this connection's handshake.
+  tls::ClientTlsSettings tls_;  // the control channel over TLS (--tls, --tls-ca, --tls-pin)
+  std::unique_ptr<asio::ssl::context> tls_context_;
+  std::string tls_error_;
+  bool tls_handshaken_ = false;
+  bool stream_answered_ = false;  // any control bytes from the server on this connection
+  std::shared_ptr<std::string> tls_note_ = std::make_shared<std::string>();
 };
 
 }  // namespace vistel::net

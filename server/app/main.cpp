@@ -9,6 +9,12 @@
 // --metrics-port serves /healthz, /readyz and Prometheus /metrics on that TCP port of the
 // bind address (0: a free one, printed as "vistel-server metrics on ADDRESS:PORT");
 // --agones reports to the Agones SDK sidecar (ready, health pings, shutdown; deploy/).
+// --secret-file F (or [auth] secret_file) requires a join token in every Join, signed with
+// the secret in F (at least 32 bytes; proto/SESSION.md §2.3); without one the server says
+// at start that rooms are open. `vistel-server token --secret-file F --room R --name N
+// [--ttl 1h]` prints such a token on stdout (ttl: seconds, or with a unit s, m, h, d).
+// --tls-cert F --tls-key F (or [tls] cert_file, key_file) runs the control channel over
+// TLS 1.2+ with that certificate chain and key (PEM); clients then need --tls.
 #include <atomic>
 #include <cstdio>
 #include <memory>
@@ -19,6 +25,8 @@
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
+#include "common/auth/secret_file.hpp"
+#include "common/auth/token_command.hpp"
 #include "common/base/file.hpp"
 #include "common/wire/packets.hpp"
 #include "server/core/server_config.hpp"
@@ -54,9 +62,42 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 65535));
   app.add_flag("--agones", agones,
                "report to the Agones SDK sidecar at localhost:$AGONES_SDK_HTTP_PORT");
+  std::string secret_file;
+  app.add_option("--secret-file", secret_file,
+                 "require a join token signed with the secret in this file in every Join "
+                 "(at least 32 bytes; default from config [auth] secret_file: none, rooms open)");
+  std::string tls_cert, tls_key;
+  auto* cert_opt = app.add_option("--tls-cert", tls_cert,
+                                  "serve the control channel over TLS with this certificate "
+                                  "chain (PEM; with --tls-key; default from config [tls])");
+  auto* key_opt = app.add_option("--tls-key", tls_key, "the private key of --tls-cert (PEM)");
+  cert_opt->needs(key_opt);
+  key_opt->needs(cert_opt);
+  auth::TokenRequest token_request;
+  CLI::App* token_cmd = app.add_subcommand(
+      "token", "print a join token for a room and a name, signed with the server's secret");
+  token_cmd->add_option("--secret-file", token_request.secret_file, "the server's secret file")
+      ->required();
+  token_cmd->add_option("--room", token_request.room, "the room it admits to")->required();
+  token_cmd->add_option("--name", token_request.name, "the member name it admits")->required();
+  token_cmd->add_option(
+      "--ttl", token_request.ttl,
+      "how long it is valid: seconds, or a number with s, m, h or d (default 1h)");
   app.set_version_flag("--version",
                        versionLine("vistel-server", kProtocolVersion, wire::kWireVersion));
   CLI11_PARSE(app, argc, argv);
+  if (token_cmd->parsed()) {
+    auto issued = auth::issueJoinToken(token_request, auth::unixNow());
+    if (!issued) {
+      std::fprintf(stderr, "vistel-server token: %s\n", issued.error().message.c_str());
+      return 1;
+    }
+    if (!issued->warning.empty()) {
+      std::fprintf(stderr, "vistel-server token: warning: %s\n", issued->warning.c_str());
+    }
+    std::printf("%s\n", issued->token.c_str());
+    return 0;
+  }
 
   spdlog::set_default_logger(spdlog::stderr_color_mt("vistel-server"));
   auto config = loadServerConfig(config_path);
@@ -75,6 +116,20 @@ int main(int argc, char** argv) {
     config->log_level = log_level;
   }
   spdlog::set_level(spdlog::level::from_str(config->log_level));
+  if (!tls_cert.empty()) {
+    config->tls_cert_file = tls_cert;
+    config->tls_key_file = tls_key;
+  }
+  if (!secret_file.empty()) config->secret_file = secret_file;
+  if (!config->secret_file.empty()) {
+    auto secret = auth::readJoinSecret(config->secret_file);
+    if (!secret) {
+      spdlog::error("{}", secret.error().message);
+      return 1;
+    }
+    if (!secret->warning.empty()) spdlog::warn("{}", secret->warning);
+    config->join_secret = std::move(secret->bytes);
+  }
 
   // Sockets, then the address line (tests and scripts parse it).
   asio::io_context io;
@@ -87,6 +142,17 @@ int main(int argc, char** argv) {
   std::fflush(stdout);
   spdlog::info("listening on {} (TCP control, UDP postures), {} Hz ticks, {} I/O threads",
                shell.localAddress(), config->tick_rate_hz, config->io_threads);
+  if (!config->tls_cert_file.empty()) {
+    spdlog::info("control channel over TLS (certificate {})", config->tls_cert_file);
+  }
+  if (config->join_secret.empty()) {
+    spdlog::warn(
+        "rooms are open: anyone who reaches {} can join any room (--secret-file requires join "
+        "tokens)",
+        shell.localAddress());
+  } else {
+    spdlog::info("join tokens required (secret from {})", config->secret_file);
+  }
 
   // Health, readiness and metrics; the orchestrator's sidecar.
   std::atomic<bool> ready{false};

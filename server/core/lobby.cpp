@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "common/auth/member_name.hpp"
 #include "common/wire/packets.hpp"
 
 namespace vistel::server {
@@ -17,14 +18,6 @@ bool validRoomName(const std::string& s) {
   return std::all_of(s.begin(), s.end(), [](char c) {
     return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
            c == '.' || c == '-';
-  });
-}
-
-bool validMemberName(const std::string& s) {
-  if (s.empty() || s.size() > 64) return false;
-  return std::all_of(s.begin(), s.end(), [](char c) {
-    const auto u = static_cast<unsigned char>(c);
-    return u >= 0x20 && u != 0x7F;
   });
 }
 
@@ -165,7 +158,9 @@ void Lobby::handleMessage(ConnId conn, Connection& c, std::span<const std::uint8
       if (joined) {
         reject(conn, control::ErrorReply::BAD_MESSAGE, "second Join on one connection", now, fx);
       } else {
+        joining_ = conn;
         handleJoin(conn, c, msg.join(), now, fx);
+        joining_.reset();
       }
       return;
     case control::ClientMessage::kLeave:
@@ -205,14 +200,14 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
            now, fx);
     return;
   }
+  if (!admitToken(conn, join, now, fx)) return;
   if (!validRoomName(join.room())) {
     reject(conn, control::ErrorReply::BAD_JOIN,
            "room name must be 1-64 characters of A-Z a-z 0-9 _ . -", now, fx);
     return;
   }
-  if (!validMemberName(join.name())) {
-    reject(conn, control::ErrorReply::BAD_JOIN,
-           "member name must be 1-64 bytes without control characters", now, fx);
+  if (Status name = auth::validateMemberName(join.name()); !name) {
+    reject(conn, control::ErrorReply::BAD_JOIN, name.error().message, now, fx, "bad name");
     return;
   }
   if (!isContentHash(join.avatar_hash())) {
@@ -814,9 +809,10 @@ void Lobby::reject(ConnId conn, control::ErrorReply::Code code, const std::strin
   if (code == control::ErrorReply::SHUTTING_DOWN) {
     spdlog::debug("lobby: closing {}: {}", who, message);
   } else {
-    drops_.drop(now,
-                reason.empty() ? std::string_view(control::ErrorReply::Code_Name(code)) : reason,
-                fmt::format("{}: {}", who, message));
+    const std::string_view key =
+        reason.empty() ? std::string_view(control::ErrorReply::Code_Name(code)) : reason;
+    drops_.drop(now, key, fmt::format("{}: {}", who, message));
+    if (conn == joining_) ++joins_refused_[std::string(key)];
   }
   control::ServerMessage msg;
   msg.mutable_error()->set_code(code);

@@ -39,6 +39,8 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <random>
@@ -90,6 +92,14 @@ class Lobby {
   int roomCount() const { return static_cast<int>(rooms_.size()); }
   // Joins accepted since the start.
   std::uint64_t joinsAccepted() const { return joins_accepted_; }
+  // Joins refused since the start, by reason (the DropLog reason: "BAD_JOIN", "bad name",
+  // "token expired", ...); a subset of drops().
+  const std::map<std::string, std::uint64_t, std::less<>>& joinsRefused() const {
+    return joins_refused_;
+  }
+  // The wall clock join tokens are checked against (unix seconds; default: the system
+  // clock). For tests.
+  void setUnixClock(std::function<std::int64_t()> clock) { unix_clock_ = std::move(clock); }
   const AvatarStore& avatars() const { return store_; }
   const DropLog& drops() const { return drops_; }
   // Bytes reserved by unfinished avatar uploads (all connections).
@@ -156,6 +166,9 @@ class Lobby {
   void handleMessage(ConnId conn, Connection& c, std::span<const std::uint8_t> payload, double now,
                      Effects& fx);
   void handleJoin(ConnId conn, Connection& c, const control::Join& join, double now, Effects& fx);
+  // With a join secret (config [auth]): false, and the connection refused UNAUTHORIZED,
+  // unless the Join carries a valid token for its room and name (lobby_auth.cpp).
+  bool admitToken(ConnId conn, const control::Join& join, double now, Effects& fx);
   void handleChunk(ConnId conn, Connection& c, const control::AvatarChunk& chunk, double now,
                    Effects& fx);
   void handleRequest(ConnId conn, const control::AvatarRequest& request, double now, Effects& fx);
@@ -220,6 +233,10 @@ class Lobby {
   // Rooms open that were created from each (limited) address.
   std::unordered_map<std::string, int> rooms_by_address_;
   DropLog drops_{"lobby"};
+  std::optional<ConnId>
+      joining_;  // the connection whose Join is being handled (its refusals count)
+  std::map<std::string, std::uint64_t, std::less<>> joins_refused_;
+  std::function<std::int64_t()> unix_clock_;
   std::uint64_t seed_;
   std::mt19937_64 rng_;
   std::random_device device_;

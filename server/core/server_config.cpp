@@ -78,7 +78,7 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
   }
   for (const auto& [key, node] : root) {
     static const std::set<std::string, std::less<>> kSections = {
-        "network", "session", "limits", "room", "log", "world", "props"};
+        "network", "session", "limits", "room", "log", "world", "props", "auth", "tls"};
     if (key.str() == "prop" && node.is_array_of_tables()) continue;
     if (!kSections.count(key.str()) || !node.is_table()) {
       return fail("{}: unknown section or key '{}'", source_name, key.str());
@@ -200,6 +200,17 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
       return fail("{}: {} [[prop]] entries but [props] max_per_room is {}", source_name,
                   c.room_props.size(), c.max_props_per_room);
     }
+  }
+
+  ConfigTable auth(root, "auth", source_name);
+  VISTEL_TRY(auth.string("secret_file", c.secret_file));
+  VISTEL_TRY(auth.checkUnknown());
+  ConfigTable tls(root, "tls", source_name);
+  VISTEL_TRY(tls.string("cert_file", c.tls_cert_file));
+  VISTEL_TRY(tls.string("key_file", c.tls_key_file));
+  VISTEL_TRY(tls.checkUnknown());
+  if (c.tls_cert_file.empty() != c.tls_key_file.empty()) {
+    return fail("{}: [tls] needs both cert_file and key_file", source_name);
   }
 
   ConfigTable log(root, "log", source_name);

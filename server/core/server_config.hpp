@@ -93,6 +93,12 @@ struct ServerConfig {
   std::vector<RoomPropConfig> room_props;  // every room starts with these
   // [log]
   std::string log_level = "info";  // trace, debug, info, warn, error
+  // [auth] (proto/SESSION.md §2.3): with a secret every Join needs a token signed by it.
+  std::string secret_file;                // "" = rooms are open to anyone reaching the port
+  std::vector<std::uint8_t> join_secret;  // read from secret_file by the program (not TOML)
+  // [tls]: the control channel over TLS (both or neither; PEM files).
+  std::string tls_cert_file;  // certificate chain
+  std::string tls_key_file;   // its private key
 };
 
 // Parses TOML text (source_name for messages).

@@ -16,6 +16,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "common/tls/tls_context.hpp"
 #include "common/wire/framing.hpp"
 
 namespace vistel::server {
@@ -55,8 +56,9 @@ void guarded(const char* where, F&& f) {
 }  // namespace
 
 struct ServerShell::TcpSession {
-  TcpSession(asio::ip::tcp::socket s, ConnId c) : socket(std::move(s)), conn(c) {}
-  asio::ip::tcp::socket socket;
+  TcpSession(tls::ControlStream s, ConnId c) : stream(std::move(s)), conn(c) {}
+  tls::ControlStream stream;  // plain TCP, or TLS with [tls]
+  bool handshaking = false;   // TLS handshake in progress: nothing is written yet
   ConnId conn;
   std::string address;    // the peer's IP address (ConnectionLimits key)
   bool released = false;  // given back to ConnectionLimits
@@ -106,6 +108,11 @@ Status ServerShell::start() {
   boost::system::error_code ec;
   const auto address = asio::ip::make_address(config_.bind_address, ec);
   if (ec) return fail("bind address '{}': {}", config_.bind_address, ec.message());
+  if (!config_.tls_cert_file.empty()) {
+    auto context = tls::makeServerContext(config_.tls_cert_file, config_.tls_key_file);
+    if (!context) return context.error();
+    tls_context_ = std::move(*context);
+  }
 
   // TCP first (port 0 picks one), then UDP on the same number; retry if that is taken.
   for (int attempt = 0; attempt < 20; ++attempt) {
@@ -221,9 +228,12 @@ void ServerShell::accept() {
           accept();
           return;
         }
-        auto session = std::make_shared<TcpSession>(std::move(socket), next_conn_++);
+        socket.set_option(asio::ip::tcp::no_delay(true), ignored);
+        auto session = std::make_shared<TcpSession>(
+            tls_context_ ? tls::ControlStream(std::move(socket), *tls_context_)
+                         : tls::ControlStream(std::move(socket)),
+            next_conn_++);
         session->address = address;
-        session->socket.set_option(asio::ip::tcp::no_delay(true), ignored);
         sessions_[session->conn] = session;
         guarded("connect", [&] {
           Effects fx;
@@ -233,8 +243,38 @@ void ServerShell::accept() {
                                       loopback && !config_.limit_loopback ? "" : address);
           applyLobbyEffects(fx);
         });
-        read(session);
+        if (session->stream.isTls()) {
+          handshake(session);
+        } else {
+          read(session);
+        }
         accept();
+      }));
+}
+
+void ServerShell::handshake(std::shared_ptr<TcpSession> s) {
+  s->handshaking = true;
+  s->stream.asyncHandshake(
+      asio::ssl::stream_base::server,
+      asio::bind_executor(lobby_strand_, [this, s](const boost::system::error_code& ec) {
+        s->handshaking = false;
+        if (s->closed) return;
+        if (ec) {
+          // Not TLS (a plain client), a certificate the client refused, or a timeout
+          // (logged at a bounded rate: a flood of plain connections cannot fill the log).
+          refused_.drop(now(), "TLS handshake failed",
+                        fmt::format("connection {} from {}: {}", s->conn, s->address,
+                                    tls::describeTlsError(ec)));
+          Effects fx;
+          guarded("disconnect", [&] { lobby_.onDisconnect(s->conn, now(), fx); });
+          s->closed = true;
+          s->stream.close();
+          forget(*s);
+          applyLobbyEffects(fx);
+          return;
+        }
+        read(s);
+        write(s);
       }));
 }
 
@@ -262,7 +302,7 @@ void ServerShell::refuse(asio::ip::tcp::socket socket, const std::string& addres
 }
 
 void ServerShell::read(std::shared_ptr<TcpSession> s) {
-  s->socket.async_read_some(
+  s->stream.asyncReadSome(
       asio::buffer(s->read_buffer),
       asio::bind_executor(
           lobby_strand_, [this, s](const boost::system::error_code& ec, std::size_t n) {
@@ -271,8 +311,7 @@ void ServerShell::read(std::shared_ptr<TcpSession> s) {
             if (ec) {
               guarded("disconnect", [&] { lobby_.onDisconnect(s->conn, now(), fx); });
               s->closed = true;
-              boost::system::error_code ignored;
-              s->socket.close(ignored);
+              s->stream.close();
               forget(*s);
             } else {
               guarded("control frame", [&] {
@@ -286,12 +325,16 @@ void ServerShell::read(std::shared_ptr<TcpSession> s) {
 
 void ServerShell::write(std::shared_ptr<TcpSession> s) {
   if (s->writing || s->closed) return;
+  if (s->handshaking) {
+    // Written after the handshake; a close meanwhile ends the handshake (its handler
+    // forgets the session).
+    if (s->close_after_flush) s->stream.close();
+    return;
+  }
   if (s->queue.empty()) {
     if (s->close_after_flush) {
       s->closed = true;
-      boost::system::error_code ignored;
-      s->socket.shutdown(asio::ip::tcp::socket::shutdown_both, ignored);
-      s->socket.close(ignored);
+      s->stream.close();
       forget(*s);
       // Once stopping, the last closed connection ends the wait for stragglers.
       if (stopping_ && sessions_.empty()) lobby_timer_.cancel();
@@ -299,8 +342,8 @@ void ServerShell::write(std::shared_ptr<TcpSession> s) {
     return;
   }
   s->writing = true;
-  asio::async_write(
-      s->socket, asio::buffer(s->queue.front()),
+  s->stream.asyncWrite(
+      asio::buffer(s->queue.front()),
       asio::bind_executor(
           lobby_strand_, [this, s](const boost::system::error_code& ec, std::size_t /*n*/) {
             s->writing = false;
@@ -312,8 +355,7 @@ void ServerShell::write(std::shared_ptr<TcpSession> s) {
               Effects fx;
               guarded("disconnect", [&] { lobby_.onDisconnect(s->conn, now(), fx); });
               s->closed = true;
-              boost::system::error_code ignored;
-              s->socket.close(ignored);
+              s->stream.close();
               forget(*s);
               applyLobbyEffects(fx);
               return;
@@ -636,11 +678,19 @@ void ServerShell::collectMetrics(std::function<void(std::string)> reply, bool re
     s.joins_total = lobby_.joinsAccepted();
     s.uptime_seconds = now();
     load_.fillMetrics(s);
-    // The lobby's drops name refused joins and dropped connections alike.
+    // The lobby's drops name refused joins and dropped connections alike ...
     for (const auto& [reason, count] : lobby_.drops().counts()) {
       auto hello = hello_drops_.find(reason);
       const std::uint64_t datagrams = hello == hello_drops_.end() ? 0 : hello->second;
       if (count > datagrams) s.connections_dropped[reason] = count - datagrams;
+    }
+    // ... of which refused joins have their own family.
+    for (const auto& [reason, count] : lobby_.joinsRefused()) {
+      s.joins_refused[reason] = count;
+      auto it = s.connections_dropped.find(reason);
+      if (it == s.connections_dropped.end()) continue;
+      it->second -= std::min(it->second, count);
+      if (it->second == 0) s.connections_dropped.erase(it);
     }
     // ... and the connections refused at accept.
     for (const auto& [reason, count] : limits_.refusals()) s.connections_dropped[reason] = count;
@@ -685,9 +735,8 @@ void ServerShell::stop() {
     lobby_timer_.async_wait([this](const boost::system::error_code& ec) {
       if (ec) return;
       for (auto& [conn, s] : sessions_) {
-        boost::system::error_code e;
         s->closed = true;
-        s->socket.close(e);
+        s->stream.close();
       }
       sessions_.clear();
     });

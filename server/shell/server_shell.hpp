@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "common/base/result.hpp"
+#include "common/tls/control_stream.hpp"
 #include "server/core/lobby.hpp"
 #include "server/core/room.hpp"
 #include "server/core/server_core.hpp"
@@ -80,6 +81,8 @@ class ServerShell {
   // After a failed accept: retry after a growing wait, logging at a bounded rate.
   void acceptFailed(const boost::system::error_code& ec);
   void read(std::shared_ptr<TcpSession> s);
+  // TLS ([tls] in the config): the server side of the handshake, then read().
+  void handshake(std::shared_ptr<TcpSession> s);
   void write(std::shared_ptr<TcpSession> s);
   void receiveDatagram();
   void onDatagram(std::shared_ptr<std::vector<std::uint8_t>> bytes, wire::Endpoint from);
@@ -102,6 +105,7 @@ class ServerShell {
   std::chrono::steady_clock::time_point start_;
   Strand lobby_strand_;
   asio::ip::tcp::acceptor acceptor_;
+  std::unique_ptr<asio::ssl::context> tls_context_;  // set by start() with [tls]
   asio::steady_timer lobby_timer_;
   asio::steady_timer stats_timer_;
   asio::steady_timer accept_timer_;

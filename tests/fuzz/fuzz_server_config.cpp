@@ -48,6 +48,8 @@ std::vector<fuzz::Seed> makeSeeds() {
       "contact_window_s = 0.2\ncontact_lead_s = 0.0\n"
       "[props]\nmax_per_room = 4\nspawn_interval_s = 1.0\nspawn_height_m = 0.5\n"
       "[log]\nlevel = \"warn\"\n"
+      "[auth]\nsecret_file = \"/etc/vistel/secret\"\n"
+      "[tls]\ncert_file = \"server.pem\"\nkey_file = \"server.key\"\n"
       "[[prop]]\nposition = [0.0, 1.0, 0.5]\nradius = 0.2\nmass = 1.5\n"
       "[[prop]]\nkind = \"ball\"\nposition = [1.0, 2.0, 0.0]\nvelocity = [0.0, 0.0, -1.0]\n"));
   seeds.push_back(fuzz::textSeed("gen_empty.toml", ""));
