@@ -75,6 +75,7 @@
 #include "client/net/playback_stats.hpp"
 #include "client/net/prop_models.hpp"
 #include "client/net/remote_jitter.hpp"
+#include "client/net/tls_options.hpp"
 #include "client/view/room_view.hpp"
 #include "common/avatar/avatar_io.hpp"
 #include "common/base/file.hpp"
@@ -232,14 +233,7 @@ int main(int argc, char** argv) {
                  "requires one");
   app.add_option("--avatar", avatar_path, "avatar file (.vavatar; default: the data folder's)");
   tls::ClientTlsSettings tls_settings;
-  app.add_flag("--tls", tls_settings.enabled,
-               "the control channel over TLS (a server started with --tls-cert)");
-  app.add_option("--tls-ca", tls_settings.ca_file,
-                 "with --tls: trust the server's certificate if this CA file (PEM) signed it "
-                 "(default: the system's CAs)");
-  app.add_option("--tls-pin", tls_settings.pin_sha256,
-                 "with --tls: trust only the certificate with this SHA-256 (64 hex digits of its "
-                 "DER form)");
+  addTlsOptions(app, tls_settings);
   app.add_option("--source", source_text,
                  "own posture source: bvh:FILE, sim:CLIP.bvh (simulated sensor rig) or "
                  "recording:FILE.vrec (default: rest posture)");
@@ -298,16 +292,9 @@ int main(int argc, char** argv) {
                  "--headless)\n");
     return 2;
   }
-  if (!tls_settings.enabled &&
-      (!tls_settings.ca_file.empty() || !tls_settings.pin_sha256.empty())) {
-    std::fprintf(stderr, "vistel-client: --tls-ca and --tls-pin need --tls\n");
+  if (const std::string tls_error = checkTlsOptions(tls_settings); !tls_error.empty()) {
+    std::fprintf(stderr, "vistel-client: %s\n", tls_error.c_str());
     return 2;
-  }
-  if (tls_settings.enabled) {
-    if (auto context = tls::makeClientContext(tls_settings); !context) {
-      std::fprintf(stderr, "vistel-client: %s\n", context.error().message.c_str());
-      return 2;
-    }
   }
   if (!screenshot.empty() && duration == 0.0) duration = 3.0;
   const Result<std::string> sensor_spec = sensorSpec(sensor_args, source_text);

@@ -51,6 +51,7 @@
 #include "client/net/data_dir.hpp"
 #include "client/net/net_driver.hpp"
 #include "client/net/playback_stats.hpp"
+#include "client/net/tls_options.hpp"
 #include "common/avatar/avatar_io.hpp"
 #include "common/base/file.hpp"
 #include "common/motion/bvh.hpp"
@@ -89,14 +90,7 @@ int main(int argc, char** argv) {
   bvh_opt->excludes(rec_opt);
   app.add_option("--avatar", avatar_path, "avatar file (.vavatar; default: the data folder's)");
   tls::ClientTlsSettings tls_settings;
-  app.add_flag("--tls", tls_settings.enabled,
-               "the control channel over TLS (a server started with --tls-cert)");
-  app.add_option("--tls-ca", tls_settings.ca_file,
-                 "with --tls: trust the server's certificate if this CA file (PEM) signed it "
-                 "(default: the system's CAs)");
-  app.add_option("--tls-pin", tls_settings.pin_sha256,
-                 "with --tls: trust only the certificate with this SHA-256 (64 hex digits of its "
-                 "DER form)");
+  addTlsOptions(app, tls_settings);
   app.add_flag("--loop", loop, "replay the clip endlessly");
   app.add_option("--duration", duration, "stop after this many seconds")
       ->check(CLI::NonNegativeNumber);
@@ -130,17 +124,11 @@ int main(int argc, char** argv) {
                  tokens.size(), count);
     return 2;
   }
-  if (!tls_settings.enabled &&
-      (!tls_settings.ca_file.empty() || !tls_settings.pin_sha256.empty())) {
-    std::fprintf(stderr, "vistel-bot: --tls-ca and --tls-pin need --tls\n");
+  if (const std::string tls_error = checkTlsOptions(tls_settings); !tls_error.empty()) {
+    std::fprintf(stderr, "vistel-bot: %s\n", tls_error.c_str());
     return 2;
   }
-  if (tls_settings.enabled) {
-    if (auto context = tls::makeClientContext(tls_settings); !context) {
-      std::fprintf(stderr, "vistel-bot: %s\n", context.error().message.c_str());
-      return 2;
-    }
-  }
+
   if (bvh_opt->count() == 0 && rec_opt->count() == 0) {
     std::fprintf(stderr, "vistel-bot: give a source: --bvh FILE or --recording FILE\n");
     return 2;

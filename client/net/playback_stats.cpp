@@ -104,24 +104,22 @@ void ShownFigures::merge(const ShownFigures& other) {
 void PlaybackStats::add(const std::string& member, JitterBuffer::Shown kind, double age_s) {
   if (kind == JitterBuffer::Shown::kNone) return;
   total_.add(kind, age_s);
-  auto it = members_.find(member);
-  if (it == members_.end()) it = members_.emplace(member, ShownFigures{}).first;
-  it->second.add(kind, age_s);
+  this->member(member).add(kind, age_s);
 }
 
-void PlaybackStats::addDrawn(const std::string& member, double t,
-                             std::span<const glm::vec3> joints) {
-  auto it = members_.find(member);
-  if (it == members_.end()) it = members_.emplace(member, ShownFigures{}).first;
-  const double jerk = it->second.drawn_jerk.add(t, joints);
+ShownFigures& PlaybackStats::member(const std::string& name) {
+  auto it = members_.find(name);
+  if (it == members_.end()) it = members_.emplace(name, ShownFigures{}).first;
+  return it->second;
+}
+
+void PlaybackStats::addDrawn(const std::string& name, double t, std::span<const glm::vec3> joints) {
+  const double jerk = member(name).drawn_jerk.add(t, joints);
   if (jerk >= 0.0) total_.drawn_jerk.addValue(jerk);
 }
 
-void PlaybackStats::addSent(const std::string& member, double t,
-                            std::span<const glm::vec3> joints) {
-  auto it = members_.find(member);
-  if (it == members_.end()) it = members_.emplace(member, ShownFigures{}).first;
-  const double jerk = it->second.sent_jerk.add(t, joints);
+void PlaybackStats::addSent(const std::string& name, double t, std::span<const glm::vec3> joints) {
+  const double jerk = member(name).sent_jerk.add(t, joints);
   if (jerk >= 0.0) total_.sent_jerk.addValue(jerk);
 }
 

@@ -72,6 +72,8 @@ class PlaybackStats {
   const std::map<std::string, ShownFigures>& members() const { return members_; }
 
  private:
+  ShownFigures& member(const std::string& name);  // its figures (added on first use)
+
   ShownFigures total_;
   std::map<std::string, ShownFigures> members_;  // by member name
 };

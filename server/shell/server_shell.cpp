@@ -265,12 +265,7 @@ void ServerShell::handshake(std::shared_ptr<TcpSession> s) {
           refused_.drop(now(), "TLS handshake failed",
                         fmt::format("connection {} from {}: {}", s->conn, s->address,
                                     tls::describeTlsError(ec)));
-          Effects fx;
-          guarded("disconnect", [&] { lobby_.onDisconnect(s->conn, now(), fx); });
-          s->closed = true;
-          s->stream.close();
-          forget(*s);
-          applyLobbyEffects(fx);
+          closeSession(*s);
           return;
         }
         read(s);
@@ -307,17 +302,14 @@ void ServerShell::read(std::shared_ptr<TcpSession> s) {
       asio::bind_executor(
           lobby_strand_, [this, s](const boost::system::error_code& ec, std::size_t n) {
             if (s->closed) return;
-            Effects fx;
             if (ec) {
-              guarded("disconnect", [&] { lobby_.onDisconnect(s->conn, now(), fx); });
-              s->closed = true;
-              s->stream.close();
-              forget(*s);
-            } else {
-              guarded("control frame", [&] {
-                lobby_.onStreamBytes(s->conn, std::span(s->read_buffer.data(), n), now(), fx);
-              });
+              closeSession(*s);
+              return;
             }
+            Effects fx;
+            guarded("control frame", [&] {
+              lobby_.onStreamBytes(s->conn, std::span(s->read_buffer.data(), n), now(), fx);
+            });
             applyLobbyEffects(fx);
             if (!s->closed && !s->close_after_flush) read(s);
           }));
@@ -344,24 +336,19 @@ void ServerShell::write(std::shared_ptr<TcpSession> s) {
   s->writing = true;
   s->stream.asyncWrite(
       asio::buffer(s->queue.front()),
-      asio::bind_executor(
-          lobby_strand_, [this, s](const boost::system::error_code& ec, std::size_t /*n*/) {
-            s->writing = false;
-            if (s->closed) return;
-            s->queued_bytes -= std::min(s->queued_bytes, s->queue.front().size());
-            queued_total_ -= std::min(queued_total_, s->queue.front().size());
-            s->queue.pop_front();
-            if (ec) {
-              Effects fx;
-              guarded("disconnect", [&] { lobby_.onDisconnect(s->conn, now(), fx); });
-              s->closed = true;
-              s->stream.close();
-              forget(*s);
-              applyLobbyEffects(fx);
-              return;
-            }
-            write(s);
-          }));
+      asio::bind_executor(lobby_strand_,
+                          [this, s](const boost::system::error_code& ec, std::size_t /*n*/) {
+                            s->writing = false;
+                            if (s->closed) return;
+                            s->queued_bytes -= std::min(s->queued_bytes, s->queue.front().size());
+                            queued_total_ -= std::min(queued_total_, s->queue.front().size());
+                            s->queue.pop_front();
+                            if (ec) {
+                              closeSession(*s);
+                              return;
+                            }
+                            write(s);
+                          }));
 }
 
 void ServerShell::forget(TcpSession& s) {
@@ -371,6 +358,15 @@ void ServerShell::forget(TcpSession& s) {
   if (!s.released) limits_.release(s.address);
   s.released = true;
   sessions_.erase(s.conn);
+}
+
+void ServerShell::closeSession(TcpSession& s) {
+  Effects fx;
+  guarded("disconnect", [&] { lobby_.onDisconnect(s.conn, now(), fx); });
+  s.closed = true;
+  s.stream.close();
+  forget(s);
+  applyLobbyEffects(fx);
 }
 
 void ServerShell::dropSlowPeer(TcpSession& s, std::string_view limit) {

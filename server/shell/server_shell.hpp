@@ -73,6 +73,9 @@ class ServerShell {
   // A peer whose queue passed a limit ("per-connection" or "total"): its member is
   // removed, what it has queued dropped (but a write in flight), the connection closed.
   void dropSlowPeer(TcpSession& s, std::string_view limit);
+  // The peer is gone (a read, write or handshake failed): the lobby forgets it, its stream
+  // closes, and what that causes is applied.
+  void closeSession(TcpSession& s);
   void armStatsTimer();
   void accept();
   // A connection refused at accept (ConnectionLimits): one ErrorReply SERVER_FULL saying
