@@ -15,6 +15,7 @@
 #include "common/avatar/avatar_io.hpp"
 #include "common/base/file.hpp"
 #include "common/wire/packets.hpp"
+#include "tests/integration/http_get.hpp"
 #include "tests/integration/program.hpp"
 #include "tests/integration/raw_control.hpp"
 #include "tests/integration/session_scratch.hpp"
@@ -27,29 +28,8 @@ namespace {
 
 using Child = test::Program;
 
-std::uint16_t portOf(const std::string& address) {
-  return static_cast<std::uint16_t>(std::stoi(address.substr(address.rfind(':') + 1)));
-}
-
-// GET path from 127.0.0.1:port; the whole response ("" on failure).
-std::string httpGet(std::uint16_t port, const std::string& path) {
-  const int fd = test::connectLoopback(port);
-  if (fd < 0) return {};
-  const std::string request =
-      "GET " + path + " HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n";
-  ::send(fd, request.data(), request.size(), MSG_NOSIGNAL);
-  timeval timeout{10, 0};
-  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
-  std::string out;
-  char buffer[4096];
-  while (true) {
-    const ssize_t n = ::recv(fd, buffer, sizeof buffer, 0);
-    if (n <= 0) break;
-    out.append(buffer, static_cast<std::size_t>(n));
-  }
-  ::close(fd);
-  return out;
-}
+using test::httpGet;
+using test::portOf;
 
 // One UDP datagram to 127.0.0.1:port.
 void sendDatagram(std::uint16_t port, const std::vector<std::uint8_t>& bytes) {
