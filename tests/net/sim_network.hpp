@@ -76,6 +76,28 @@ class SimNetwork {
     flushAll();
   }
 
+  // The client's TCP connection dies at once (a cable cut, a crash): both ends are told.
+  void cut(std::size_t i) {
+    Client& c = clients_[i];
+    if (!c.connected) return;
+    c.connected = false;
+    server_.onDisconnect(c.conn, now_);
+    c.session->onDisconnected("connection cut", localTime(i));
+    flushAll();
+  }
+  // The client comes back as a new session on a new connection (a restarted program).
+  void reconnect(std::size_t i, net::SessionSettings settings) {
+    cut(i);
+    Client& c = clients_[i];
+    c.session = std::make_unique<net::ClientSession>(std::move(settings), nullptr);
+    c.conn = next_conn_++;
+    c.tcp_up_free = c.tcp_down_free = now_;
+    connect(i);
+  }
+  // Sees every UDP datagram a client or the server sends (before the link model), e.g.
+  // to replay or forge them.
+  std::function<void(const std::vector<std::uint8_t>&)> tap;
+
   // Raw traffic from a misbehaving peer (not a session).
   void injectDatagram(std::vector<std::uint8_t> bytes, const wire::Endpoint& from,
                       double delay = 0.0) {
@@ -169,6 +191,7 @@ class SimNetwork {
   void flushServer() {
     server::Effects& fx = server_.effects();
     for (server::OutDatagram& d : fx.datagrams) {
+      if (tap) tap(d.bytes);
       Client* c = clientAt(d.to);
       if (c == nullptr) {
         raw_datagrams_[d.to.toString()].push_back(std::move(d.bytes));
@@ -218,6 +241,7 @@ class SimNetwork {
       });
     }
     for (auto& d : out.datagrams) {
+      if (tap) tap(d);
       sendDatagram(c.up, [this, from = c.endpoint, bytes = std::move(d)] {
         server_.onDatagram(bytes, from, now_);
       });
@@ -236,6 +260,7 @@ class SimNetwork {
   std::mt19937_64 rng_;
   std::map<std::pair<double, std::uint64_t>, std::function<void()>> events_;
   std::uint64_t next_event_ = 0;
+  server::ConnId next_conn_ = 100000;  // reconnect()'s connections
   std::uint64_t lost_ = 0;
   std::uint64_t sent_ = 0;
   std::map<server::ConnId, std::vector<std::uint8_t>> raw_in_;
