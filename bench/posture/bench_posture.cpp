@@ -7,7 +7,12 @@
 //                   wrists (target <= 2 cm with default noise on the gesture clips)
 //   mpjpe_all_cm    ... over every joint (legs come from a standing heuristic)
 //   mpjre_deg       mean joint rotation error (model space), all joints; mpjre_upper_deg
-//   jerk_solved, jerk_clip   mean |jerk| of all joints, m/s^3 (jitter)
+//   jerk_solved, jerk_clip   mean |jerk| of all joints, m/s^3 (jitter); jitter_ratio their
+//                   ratio (issue 21's target: <= 1.5 with default noise, <= 1.1 without);
+//                   jitter_upper_ratio the same over the upper-body joints
+//   lag_ms          how far the solved upper body trails the clip (velocity cross-
+//                   correlation; target: at most one sensor frame, 8.3 ms at 120 Hz)
+//   jump_ratio      largest frame-to-frame joint move, solved / clip (pops; target <= 1.5)
 // The timed loop is one solver call per iteration (target <= 20 us per frame).
 //
 // Run from the project root: build/<dir>/bench/posture/bench_posture
@@ -108,6 +113,11 @@ void benchClip(benchmark::State& state, const std::string& path, bool noise) {
   state.counters["mpjre_upper_deg"] = m.mpjre_upper_deg;
   state.counters["jerk_solved"] = m.jerk_solved;
   state.counters["jerk_clip"] = m.jerk_truth;
+  state.counters["jitter_ratio"] = m.jitterRatio();
+  state.counters["jitter_upper_ratio"] =
+      m.jerk_upper_truth > 0.0 ? m.jerk_upper_solved / m.jerk_upper_truth : 0.0;
+  state.counters["lag_ms"] = m.lag_s * 1e3;
+  state.counters["jump_ratio"] = m.jumpRatio();
   // Seconds per solver call (the Time column says the same per iteration).
   state.counters["solve_time"] =
       benchmark::Counter(static_cast<double>(state.iterations()),

@@ -1,6 +1,7 @@
 #include "common/sensors/posture_metrics.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "common/sensors/rotation_utils.hpp"
 
@@ -28,17 +29,75 @@ Posed pose(const Skeleton& skeleton, std::span<const Posture> postures) {
   return out;
 }
 
-double meanJerk(const std::vector<glm::vec3>& p, std::size_t frames, std::size_t n, double dt) {
+// Mean |third difference| / dt^3 over the joints (every joint when `joints` is empty).
+double meanJerk(const std::vector<glm::vec3>& p, std::size_t frames, std::size_t n, double dt,
+                std::span<const int> joints = {}) {
   if (frames < 4) return 0.0;
   double sum = 0.0;
+  std::size_t count = 0;
+  auto add = [&](std::size_t f, std::size_t j) {
+    const glm::vec3 d3 =
+        p[(f + 3) * n + j] - 3.0f * p[(f + 2) * n + j] + 3.0f * p[(f + 1) * n + j] - p[f * n + j];
+    sum += glm::length(d3);
+    ++count;
+  };
   for (std::size_t f = 0; f + 3 < frames; ++f) {
-    for (std::size_t j = 0; j < n; ++j) {
-      const glm::vec3 d3 =
-          p[(f + 3) * n + j] - 3.0f * p[(f + 2) * n + j] + 3.0f * p[(f + 1) * n + j] - p[f * n + j];
-      sum += glm::length(d3);
+    if (joints.empty()) {
+      for (std::size_t j = 0; j < n; ++j) add(f, j);
+    } else {
+      for (int j : joints) add(f, static_cast<std::size_t>(j));
     }
   }
-  return sum / (static_cast<double>((frames - 3) * n) * dt * dt * dt);
+  return count > 0 ? sum / (static_cast<double>(count) * dt * dt * dt) : 0.0;
+}
+
+double maxJump(const std::vector<glm::vec3>& p, std::size_t frames, std::size_t n) {
+  double worst = 0.0;
+  for (std::size_t f = 1; f < frames; ++f) {
+    for (std::size_t j = 0; j < n; ++j) {
+      worst = std::max(worst, static_cast<double>(glm::distance(p[f * n + j], p[(f - 1) * n + j])));
+    }
+  }
+  return worst;
+}
+
+// Normalised cross-correlation of the joints' velocities, solved shifted by k frames later
+// than the truth; the best k refined by a parabola through its neighbours.
+double velocityLag(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b,
+                   std::size_t frames, std::size_t n, std::span<const int> joints, double dt) {
+  if (frames < 8 || joints.empty()) return 0.0;
+  const int max_shift =
+      std::min(static_cast<int>(std::ceil(0.25 / dt)), static_cast<int>(frames / 4));
+  auto vel = [&](const std::vector<glm::vec3>& p, std::size_t f, int j) {
+    const std::size_t u = static_cast<std::size_t>(j);
+    return glm::dvec3(p[(f + 1) * n + u] - p[f * n + u]);
+  };
+  std::vector<double> score(static_cast<std::size_t>(2 * max_shift + 1), -2.0);
+  for (int k = -max_shift; k <= max_shift; ++k) {
+    double ab = 0.0, aa = 0.0, bb = 0.0;
+    for (std::size_t f = 0; f + 1 < frames; ++f) {
+      const long g = static_cast<long>(f) + k;
+      if (g < 0 || g + 1 >= static_cast<long>(frames)) continue;
+      for (int j : joints) {
+        const glm::dvec3 va = vel(a, f, j);
+        const glm::dvec3 vb = vel(b, static_cast<std::size_t>(g), j);
+        ab += glm::dot(va, vb);
+        aa += glm::dot(va, va);
+        bb += glm::dot(vb, vb);
+      }
+    }
+    if (aa > 0.0 && bb > 0.0)
+      score[static_cast<std::size_t>(k + max_shift)] = ab / std::sqrt(aa * bb);
+  }
+  const std::size_t best =
+      static_cast<std::size_t>(std::max_element(score.begin(), score.end()) - score.begin());
+  double shift = static_cast<double>(best) - max_shift;
+  if (best > 0 && best + 1 < score.size()) {
+    const double l = score[best - 1], c = score[best], r = score[best + 1];
+    const double den = l - 2.0 * c + r;
+    if (den < 0.0) shift += std::clamp(0.5 * (l - r) / den, -0.5, 0.5);
+  }
+  return shift * dt;
 }
 
 }  // namespace
@@ -87,6 +146,11 @@ PostureMetrics measurePostures(const Skeleton& skeleton, const JointRoles& roles
   }
   m.jerk_truth = meanJerk(a.position, frames, n, frame_time);
   m.jerk_solved = meanJerk(b.position, frames, n, frame_time);
+  m.jerk_upper_truth = meanJerk(a.position, frames, n, frame_time, upper);
+  m.jerk_upper_solved = meanJerk(b.position, frames, n, frame_time, upper);
+  m.max_jump_truth_m = maxJump(a.position, frames, n);
+  m.max_jump_solved_m = maxJump(b.position, frames, n);
+  m.lag_s = velocityLag(a.position, b.position, frames, n, upper, frame_time);
   return m;
 }
 
