@@ -22,6 +22,7 @@
 #include "common/base/file.hpp"
 #include "common/motion/bvh.hpp"
 #include "common/scene/seat_layout.hpp"
+#include "common/wire/datagram_crypto.hpp"
 #include "common/wire/packets.hpp"
 #include "server/core/collision_model.hpp"
 #include "server/core/room.hpp"
@@ -76,6 +77,7 @@ struct RoomRun {
   std::unique_ptr<Room> room;
   std::vector<wire::Endpoint> endpoints;
   std::vector<std::uint16_t> sequences;
+  std::vector<wire::DatagramSealer> sealers;  // each member's uplink (WIRE.md §3.9)
   Posture posture;
   std::vector<std::uint8_t> datagram;
   Effects fx;
@@ -91,7 +93,9 @@ void fill(RoomRun& run, int members) {
     c.kind = RoomCommand::Kind::kAddMember;
     c.room = RoomId{1};
     c.member = MemberId{0x00010000u + static_cast<std::uint32_t>(i)};
-    c.key = 7u + static_cast<std::uint64_t>(i);
+    c.uplink_key.fill(static_cast<std::uint8_t>(7 + i));
+    c.downlink_key.fill(static_cast<std::uint8_t>(100 + i));
+    run.sealers.push_back(wire::DatagramSealer{c.uplink_key});
     c.seat = seatPlacement(i, SeatLayout{});
     c.joint_count = f.joints;
     c.collision = f.model;
@@ -118,11 +122,12 @@ void postures(RoomRun& run) {
     net::ClipPlayer& player = *f.players[static_cast<std::size_t>(i) % f.players.size()];
     player.sample(run.now + 0.37 * i, true, run.posture);
     wire::PosturePacket p;
-    p.header = {0x00010000u + static_cast<std::uint32_t>(i), 7u + static_cast<std::uint64_t>(i)};
+    p.header = {0x00010000u + static_cast<std::uint32_t>(i), 0};
     wire::encodePostureRecord(run.posture, ++run.sequences[static_cast<std::size_t>(i)], run.now,
                               p.record);
     run.datagram.clear();
     wire::write(p, run.datagram);
+    run.sealers[static_cast<std::size_t>(i)].seal(wire::kClientHeaderBytes, run.datagram);
     const double at = run.now + kTick * i / members;
     run.room->onDatagram(run.datagram, run.endpoints[static_cast<std::size_t>(i)], at, run.fx);
     run.room->update(at, run.fx);

@@ -85,9 +85,22 @@ void ClientSession::start(double now) {
   if (!settings_.token.empty()) join.set_token(settings_.token);
   join.set_avatar_hash(settings_.avatar_hash);
   join.set_avatar_size(settings_.avatar_bytes ? settings_.avatar_bytes->size() : 0);
+  const bool fixed_key =
+      std::any_of(settings_.fixed_udp_private_key.begin(), settings_.fixed_udp_private_key.end(),
+                  [](std::uint8_t b) { return b != 0; });
+  auto exchange = fixed_key ? wire::KeyExchange::fromPrivateKey(settings_.fixed_udp_private_key)
+                            : wire::KeyExchange::generate();
+  if (!exchange) {
+    close("UDP key generation failed: " + exchange.error().message);
+    return;
+  }
+  exchange_.emplace(std::move(*exchange));
+  join.set_udp_public_key(exchange_->publicKey().data(), exchange_->publicKey().size());
   if (settings_.resume_member_id != 0) {
     join.set_resume_member_id(settings_.resume_member_id);
-    join.set_resume_key(settings_.resume_key);
+    const wire::ResumeProof proof =
+        wire::resumeProof(settings_.resume_secret, exchange_->publicKey());
+    join.set_resume_proof(proof.data(), proof.size());
   }
   sendControl(msg.SerializeAsString());
 }
@@ -143,7 +156,7 @@ void ClientSession::handleMessage(const control::ServerMessage& msg, double now)
         return;
       }
       member_id_ = w.member_id();
-      key_ = w.udp_key();
+      if (!deriveKeys(w)) return;
       room_name_ = w.room();
       tick_rate_hz_ = w.tick_rate_hz();
       clock_.seed(w.server_time(), now);
@@ -343,33 +356,75 @@ void ClientSession::onDisconnected(const std::string& reason, double /*now*/) {
 
 // ---------------------------------------------------------------- UDP
 
+bool ClientSession::deriveKeys(const control::Welcome& w) {
+  const auto server_public = std::span(
+      reinterpret_cast<const std::uint8_t*>(w.udp_public_key().data()), w.udp_public_key().size());
+  auto shared = exchange_ ? exchange_->sharedSecret(server_public)
+                          : Result<std::array<std::uint8_t, 32>>(fail("no key pair"));
+  if (!shared) {
+    close("server sent a Welcome without a valid UDP public key: " + shared.error().message);
+    return false;
+  }
+  wire::PublicKey server{};
+  std::copy(server_public.begin(), server_public.end(), server.begin());
+  auto keys =
+      wire::deriveSessionKeys(*shared, exchange_->publicKey(), server, member_id_, w.room());
+  if (!keys) {
+    close("UDP key derivation failed: " + keys.error().message);
+    return false;
+  }
+  keys_ = *keys;
+  uplink_ = wire::DatagramSealer{keys_.client_to_server};
+  downlink_ = wire::DatagramOpener{keys_.server_to_client, {}};
+  hello_downlink_ = wire::DatagramOpener{keys_.server_hello, {}};
+  exchange_.reset();  // the private key is not needed again
+  return true;
+}
+
 void ClientSession::sendHello(double now) {
   wire::HelloPacket hello;
   hello.header.member_id = member_id_;
-  hello.header.key = key_;
   hello.attempt = ++hello_attempt_;
   hello.cookie = hello_cookie_;
-  wire::write(hello, outbox_.datagrams.emplace_back());
+  std::vector<std::uint8_t>& out = outbox_.datagrams.emplace_back();
+  wire::write(hello, out);
+  uplink_.seal(wire::kClientHeaderBytes, out);
   next_hello_ = now + settings_.hello_interval_s;
 }
 
 void ClientSession::sendPing(double now) {
   wire::PingPacket ping;
   ping.header.member_id = member_id_;
-  ping.header.key = key_;
   ping.ping_id = ++ping_id_;
   ping.client_time = now;
-  wire::write(ping, outbox_.datagrams.emplace_back());
+  std::vector<std::uint8_t>& out = outbox_.datagrams.emplace_back();
+  wire::write(ping, out);
+  uplink_.seal(wire::kClientHeaderBytes, out);
   if (pending_pings_.size() >= kPendingPings) pending_pings_.erase(pending_pings_.begin());
   pending_pings_.emplace_back(ping.ping_id, now);
   const bool fast = static_cast<int>(ping_id_) < settings_.fast_pings;
   next_ping_ = now + (fast ? settings_.fast_ping_interval_s : settings_.ping_interval_s);
 }
 
-void ClientSession::onDatagram(std::span<const std::uint8_t> datagram, double now) {
+void ClientSession::onDatagram(std::span<const std::uint8_t> sealed, double now) {
   if (state_ != SessionState::kHandshaking && state_ != SessionState::kLive) return;
-  stats_.datagram_bytes_received += datagram.size();
-  const auto type = wire::peekPacketType(datagram);
+  stats_.datagram_bytes_received += sealed.size();
+  const auto type = wire::peekPacketType(sealed);
+  if (!type) {
+    ++stats_.datagrams_rejected;
+    return;
+  }
+  // Open it (WIRE.md §3.9): hello acks under the lobby's key, the rest under the room's;
+  // a datagram that does not verify, or one seen before, is rejected unread.
+  scratch_datagram_.assign(sealed.begin(), sealed.end());
+  wire::DatagramOpener& opener = *type == wire::PacketType::kHelloAck ? hello_downlink_ : downlink_;
+  std::size_t plain_size = 0;
+  std::string_view refused;
+  if (!opener.open(wire::kServerHeaderBytes, scratch_datagram_, plain_size, refused)) {
+    ++stats_.datagrams_rejected;
+    return;
+  }
+  const std::span<const std::uint8_t> datagram = std::span(scratch_datagram_).first(plain_size);
   if (type == wire::PacketType::kHelloAck) {
     wire::HelloAckPacket ack;
     if (!wire::read(datagram, ack) || ack.member_id != member_id_) {
@@ -409,13 +464,14 @@ void ClientSession::onDatagram(std::span<const std::uint8_t> datagram, double no
     // Only answers to our own recent pings count.
     auto it = std::find_if(pending_pings_.begin(), pending_pings_.end(),
                            [&](const auto& p) { return p.first == pong.ping_id; });
-    if (it == pending_pings_.end() || it->second != pong.client_time) {
+    if (it == pending_pings_.end()) {
       ++stats_.datagrams_rejected;
       return;
     }
+    const double sent_at = it->second;
     pending_pings_.erase(it);
     last_server_datagram_ = now;
-    clock_.addSample(pong.client_time, pong.server_time, now);
+    clock_.addSample(sent_at, pong.server_time, now);
   } else if (type == wire::PacketType::kSnapshot) {
     handleSnapshot(datagram, now);
   } else {
@@ -533,8 +589,9 @@ bool ClientSession::sendPosture(const Posture& posture, double now) {
                         scratch_record_bytes_)) {
     return false;
   }
-  wire::writePostureDatagram({member_id_, key_}, scratch_record_bytes_,
+  wire::writePostureDatagram({member_id_, 0}, scratch_record_bytes_,
                              outbox_.datagrams.emplace_back());
+  uplink_.seal(wire::kClientHeaderBytes, outbox_.datagrams.back());
   ++stats_.postures_sent;
   stats_.posture_bytes_sent += outbox_.datagrams.back().size();
   return true;

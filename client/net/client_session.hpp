@@ -13,9 +13,15 @@
 // driver: what may clear by itself (a lost connection, a busy server) and what will not (a
 // refusal of this client's request).
 //
+// UDP keys (proto/WIRE.md §3.9): the Join carries a fresh X25519 public key, the Welcome
+// the server's; the derived keys seal every datagram we send and open every one we
+// receive (a datagram that does not verify, or repeats a counter, is counted as rejected
+// and otherwise ignored).
+//
 // Resuming (proto/SESSION.md §4): a session made for reconnecting carries the previous
-// Welcome's member id and UDP key in its Join (SessionSettings::resume_*), so the server
-// replaces our stale member instead of refusing the name. NAT rebinding: in kLive, when
+// Welcome's member id and a proof from that session's resume secret in its Join
+// (SessionSettings::resume_*; the secret never travels), so the server replaces our stale
+// member instead of refusing the name. NAT rebinding: in kLive, when
 // nothing came from the server for rehello_after_s, the session says hello again every
 // hello_interval_s (echoing a challenge, as in the first handshake) until a plain ack:
 // the server moves the member to a changed address only after that check.
@@ -28,6 +34,7 @@
 // members().size() + k is props()[k] ("scene order"), and validates it.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -45,6 +52,7 @@
 #include "common/base/result.hpp"
 #include "common/deform/interactions.hpp"
 #include "common/deform/prop.hpp"
+#include "common/wire/datagram_crypto.hpp"
 #include "common/wire/framing.hpp"
 #include "common/wire/packets.hpp"
 #include "common/wire/posture_delta.hpp"
@@ -53,11 +61,12 @@ namespace vistel::control {
 class ServerMessage;
 class Roster;
 class AvatarChunk;
+class Welcome;
 }  // namespace vistel::control
 
 namespace vistel::net {
 
-inline constexpr std::uint32_t kProtocolVersion = 3;
+inline constexpr std::uint32_t kProtocolVersion = 4;
 
 struct SessionSettings {
   std::string room;
@@ -81,10 +90,14 @@ struct SessionSettings {
   // Reconnecting (NetDriver): after a live session is lost, join again for this long
   // (seconds from the loss) before giving up; 0: never reconnect.
   double reconnect_give_up_s = 180.0;
-  // The previous Welcome's member id and UDP key when this session resumes one (sent in the
-  // Join; 0: a first join).
+  // The previous Welcome's member id and that session's resume secret when this session
+  // resumes one (the Join carries the id and a proof from the secret, WIRE.md §3.9; 0: a
+  // first join).
   std::uint32_t resume_member_id = 0;
-  std::uint64_t resume_key = 0;
+  wire::ResumeSecret resume_secret{};
+  // Tests and fuzzing only: a fixed X25519 private key for the UDP key exchange, so that a
+  // recorded session replays (all zero, the default: a fresh random key pair per Join).
+  std::array<std::uint8_t, 32> fixed_udp_private_key{};
   int jitter_capacity = 32;                  // postures kept per remote member
   int prop_track_capacity = 32;              // states kept per prop
   std::size_t max_frame_bytes = 1u << 20;    // control frames accepted from the server
@@ -201,7 +214,8 @@ class ClientSession {
   CloseCause closeCause() const { return close_cause_; }
   // From the Welcome (0 before it): what a later session needs to resume this one.
   std::uint32_t memberId() const { return member_id_; }
-  std::uint64_t udpKey() const { return key_; }
+  // The resume secret derived with the Welcome (zero before it; never sent).
+  const wire::ResumeSecret& resumeSecret() const { return keys_.resume; }
   const std::string& roomName() const { return room_name_; }
   // Re-saying hello in kLive (the server's datagrams stopped) until the server acks.
   bool rehelloing() const { return rebinding_; }
@@ -262,6 +276,9 @@ class ClientSession {
   int sceneIndex(const ServerBodyPrim& body) const;
   void uploadAvatar(std::size_t chunk_bytes);
   void requestMissingAvatars();
+  // The UDP keys from the Welcome's public key (closes the session and returns false on a
+  // bad one).
+  bool deriveKeys(const control::Welcome& w);
   void sendHello(double now);
   void sendPing(double now);
   void sendControl(const std::string& payload);
@@ -278,7 +295,14 @@ class ClientSession {
   SessionOutbox outbox_;
 
   std::uint32_t member_id_ = 0;
-  std::uint64_t key_ = 0;
+  // The UDP keys (WIRE.md §3.9): our key pair until the Welcome, then the derived keys,
+  // the sender of our datagrams and the openers of the room's and the lobby's.
+  std::optional<wire::KeyExchange> exchange_;
+  wire::SessionKeys keys_;
+  wire::DatagramSealer uplink_;
+  wire::DatagramOpener downlink_;
+  wire::DatagramOpener hello_downlink_;
+  std::vector<std::uint8_t> scratch_datagram_;  // a datagram being opened
   double tick_rate_hz_ = 0.0;
   bool avatar_pending_ = false;  // uploaded, not yet accepted
   double state_since_ = 0.0;

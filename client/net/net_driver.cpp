@@ -134,7 +134,7 @@ void NetDriver::maybeRejoin() {
     // The newest Welcome is what a later join resumes.
     if (session_->memberId() != 0) {
       resume_member_id_ = session_->memberId();
-      resume_key_ = session_->udpKey();
+      resume_secret_ = session_->resumeSecret();
     }
 
     // Whether to try again: a busy server always (within the backoff's attempts); after a
@@ -187,7 +187,7 @@ void NetDriver::maybeRejoin() {
                      settings_.name, why, delay, reconnect_backoff_.attempts());
       }
       settings_.resume_member_id = resume_member_id_;
-      settings_.resume_key = resume_key_;
+      settings_.resume_secret = resume_secret_;
     } else {
       // A join refused for a transient reason: again, backing off.
       delay = backoff_.nextDelay(hint);

@@ -149,9 +149,9 @@ class NetDriver : public std::enable_shared_from_this<NetDriver> {
   bool session_live_ = false;           // the current one has (noted)
   double lost_at_ = -1.0;               // when the live session was lost (< 0: not reconnecting)
   bool ended_ = false;                  // closed for good: state() reports kClosed
-  std::uint32_t resume_member_id_ = 0;  // the newest Welcome's id and key
+  std::uint32_t resume_member_id_ = 0;  // the newest Welcome's id
   std::string last_close_reason_;       // see lastCloseReason()
-  std::uint64_t resume_key_ = 0;
+  wire::ResumeSecret resume_secret_{};  // that session's resume secret (WIRE.md §3.9)
 
   // Strand only.
   std::deque<std::vector<std::uint8_t>> write_queue_;

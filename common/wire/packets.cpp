@@ -6,7 +6,7 @@
 namespace vistel::wire {
 namespace {
 
-constexpr std::size_t kSnapshotCountOffset = 14;  // entry_count
+constexpr std::size_t kSnapshotCountOffset = 22;  // entry_count
 
 template <typename Packet>
 void writeAny(const Packet& p, std::vector<std::uint8_t>& out) {
@@ -18,7 +18,7 @@ void writeAny(const Packet& p, std::vector<std::uint8_t>& out) {
 
 template <typename Packet>
 bool readAny(std::span<const std::uint8_t> datagram, Packet& out) {
-  if (datagram.size() > kMaxDatagramBytes) return false;
+  if (datagram.size() > kMaxPlainDatagramBytes) return false;
   ReadStream s(datagram);
   return serialize(s, out) && s.atEnd();
 }
@@ -50,6 +50,10 @@ std::optional<PacketType> peekPacketType(std::span<const std::uint8_t> datagram)
   return std::nullopt;
 }
 
+std::size_t clearHeaderBytes(PacketType type) {
+  return (static_cast<std::uint8_t>(type) & 0x80) != 0 ? kServerHeaderBytes : kClientHeaderBytes;
+}
+
 std::optional<std::uint32_t> peekMemberId(std::span<const std::uint8_t> datagram) {
   if (datagram.size() < kClientHeaderBytes) return std::nullopt;
   ReadStream s(datagram.subspan(2, 4));
@@ -66,7 +70,9 @@ void write(const PongPacket& p, std::vector<std::uint8_t>& out) { writeAny(p, ou
 
 bool readPostureDatagram(std::span<const std::uint8_t> datagram, ClientHeader& header,
                          std::span<const std::uint8_t>& record) {
-  if (datagram.size() <= kClientHeaderBytes || datagram.size() > kMaxDatagramBytes) return false;
+  if (datagram.size() <= kClientHeaderBytes || datagram.size() > kMaxPlainDatagramBytes) {
+    return false;
+  }
   ReadStream s(datagram.first(kClientHeaderBytes));
   if (!serialize(s, header, PacketType::kPosture)) return false;
   record = datagram.subspan(kClientHeaderBytes);
@@ -95,7 +101,7 @@ bool read(std::span<const std::uint8_t> datagram, HelloAckPacket& out) {
   return readAny(datagram, out);
 }
 bool read(std::span<const std::uint8_t> datagram, PongPacket& out) {
-  return readAny(datagram, out) && finite(out.client_time) && finite(out.server_time);
+  return readAny(datagram, out) && finite(out.server_time);
 }
 
 std::size_t measure(const HelloPacket& p) { return measureAny(p); }
@@ -147,7 +153,7 @@ void writeSnapshotWorld(std::span<const PropStateRecord> props, const Interactio
 }
 
 bool readSnapshot(std::span<const std::uint8_t> datagram, Snapshot& out) {
-  if (datagram.size() > kMaxDatagramBytes) return false;
+  if (datagram.size() > kMaxPlainDatagramBytes) return false;
   ReadStream s(datagram);
   return serialize(s, out) && finite(out.header.server_time) && s.atEnd();
 }

@@ -1,11 +1,15 @@
 // The UDP datagrams of a session (proto/WIRE.md §3), each with one serialize function
 // used to read, write and measure it.
 //
-// Client -> server datagrams start with the 14-byte client header (version, type, member
-// id, key); server -> client datagrams with version and type only. Readers accept a
-// datagram only when it has the current version, the expected type, every field in
-// range, and no bytes left over; anything else is rejected (false) without side effects
-// on the caller's state beyond the output struct.
+// These are the *plain* layouts: on the wire every datagram is sealed (datagram_crypto.hpp,
+// WIRE.md §3.9): its clear header stays as written here, the rest is encrypted and a
+// 16-byte tag follows. Client -> server datagrams start with the 14-byte clear header
+// (version, type, member id, counter); server -> client datagrams with a 10-byte one
+// (version, type, counter). Writers leave the counter 0 (sealing fills it); readers read
+// it (opening checked it). Readers accept a datagram only when it has the
+// current version, the expected type, every field in range, and no bytes left over;
+// anything else is rejected (false) without side effects on the caller's state beyond the
+// output struct.
 #pragma once
 
 #include <cstdint>
@@ -21,13 +25,19 @@ namespace vistel::wire {
 
 // Version 2 added the collision world to snapshots (props, interaction lists); version 3
 // delta-codes the posture a client sends (posture_delta.hpp) and acknowledges it in every
-// snapshot's header.
-inline constexpr std::uint8_t kWireVersion = 3;
-// Largest UDP payload either side sends (stays below common path MTUs). Readers reject
-// anything larger.
+// snapshot's header; version 4 seals every datagram (a counter in the clear header, the
+// body encrypted, a 16-byte tag; the UDP key is gone).
+inline constexpr std::uint8_t kWireVersion = 4;
+// Largest UDP payload either side sends, sealed (stays below common path MTUs). Readers
+// reject anything larger.
 inline constexpr std::size_t kMaxDatagramBytes = 1200;
-inline constexpr std::size_t kClientHeaderBytes = 14;
-inline constexpr std::size_t kSnapshotHeaderBytes = 21;
+// Sealing appends this many bytes (the AEAD tag) to the plain layout.
+inline constexpr std::size_t kSealOverheadBytes = 16;
+// Largest plain layout: what fits kMaxDatagramBytes once sealed.
+inline constexpr std::size_t kMaxPlainDatagramBytes = kMaxDatagramBytes - kSealOverheadBytes;
+inline constexpr std::size_t kClientHeaderBytes = 14;  // version, type, member id, counter
+inline constexpr std::size_t kServerHeaderBytes = 10;  // version, type, counter
+inline constexpr std::size_t kSnapshotHeaderBytes = 29;
 inline constexpr std::size_t kSnapshotEntryOverhead = 4;  // member id before each record
 inline constexpr int kMaxInteractionParts = 32;           // datagrams of one tick's list
 
@@ -42,7 +52,7 @@ enum class PacketType : std::uint8_t {
 
 struct ClientHeader {
   std::uint32_t member_id = 0;
-  std::uint64_t key = 0;  // the member's UDP key from the Welcome
+  std::uint64_t counter = 0;  // the sender's datagram counter (set by sealing)
 };
 
 struct HelloPacket {
@@ -72,12 +82,14 @@ struct HelloAckPacket {
   std::uint32_t member_id = 0;
   std::uint32_t attempt = 0;
   std::uint64_t cookie = 0;
+  std::uint64_t counter = 0;  // the sender's datagram counter (set by sealing)
 };
 
+// The client pairs it with its ping by id (it remembers when it sent each).
 struct PongPacket {
   std::uint32_t ping_id = 0;
-  double client_time = 0.0;  // echoed from the ping
-  double server_time = 0.0;  // server clock when the ping was handled, seconds
+  double server_time = 0.0;   // server clock when the ping was handled, seconds
+  std::uint64_t counter = 0;  // the sender's datagram counter (set by sealing)
 };
 
 struct SnapshotHeader {
@@ -91,6 +103,7 @@ struct SnapshotHeader {
   // (when kAckValid) and whether it needs a keyframe (kAckWantKeyframe).
   std::uint16_t posture_ack = 0;
   std::uint8_t ack_flags = 0;
+  std::uint64_t counter = 0;  // the sender's datagram counter (set by sealing; bytes 2..9)
 };
 inline constexpr std::uint8_t kAckValid = 1;
 inline constexpr std::uint8_t kAckWantKeyframe = 2;
@@ -119,9 +132,15 @@ bool serializeKind(Stream& s, PacketType type) {
   return version == kWireVersion && kind == static_cast<std::uint8_t>(type);
 }
 
+// A server -> client clear header: version, type, counter.
+template <typename Stream>
+bool serializeServerKind(Stream& s, PacketType type, std::uint64_t& counter) {
+  return serializeKind(s, type) && serializeU64(s, counter);
+}
+
 template <typename Stream>
 bool serialize(Stream& s, ClientHeader& h, PacketType type) {
-  return serializeKind(s, type) && serializeU32(s, h.member_id) && serializeU64(s, h.key);
+  return serializeKind(s, type) && serializeU32(s, h.member_id) && serializeU64(s, h.counter);
 }
 
 template <typename Stream>
@@ -145,19 +164,19 @@ bool serialize(Stream& s, PingPacket& p) {
 
 template <typename Stream>
 bool serialize(Stream& s, HelloAckPacket& p) {
-  return serializeKind(s, PacketType::kHelloAck) && serializeU32(s, p.member_id) &&
+  return serializeServerKind(s, PacketType::kHelloAck, p.counter) && serializeU32(s, p.member_id) &&
          serializeU32(s, p.attempt) && serializeU64(s, p.cookie);
 }
 
 template <typename Stream>
 bool serialize(Stream& s, PongPacket& p) {
-  return serializeKind(s, PacketType::kPong) && serializeU32(s, p.ping_id) &&
-         serializeF64(s, p.client_time) && serializeF64(s, p.server_time);
+  return serializeServerKind(s, PacketType::kPong, p.counter) && serializeU32(s, p.ping_id) &&
+         serializeF64(s, p.server_time);
 }
 
 template <typename Stream>
 bool serialize(Stream& s, SnapshotHeader& h) {
-  if (!serializeKind(s, PacketType::kSnapshot) || !serializeU32(s, h.tick) ||
+  if (!serializeServerKind(s, PacketType::kSnapshot, h.counter) || !serializeU32(s, h.tick) ||
       !serializeF64(s, h.server_time) || !serializeU8(s, h.entry_count) ||
       !serializeU8(s, h.prop_count) || !serializeU8(s, h.part) || !serializeU8(s, h.part_count) ||
       !serializeU16(s, h.posture_ack) || !serializeU8(s, h.ack_flags)) {
@@ -208,11 +227,15 @@ bool serialize(Stream& s, Snapshot& x) {
 // ----- whole datagrams -----
 
 // The packet type of a datagram with the current version, or nullopt (wrong version,
-// unknown type, too short or too long). Cheap: for routing before a full read.
+// unknown type, too short or too long). Cheap: for routing before a full read. Works on
+// sealed and plain datagrams alike (the first two bytes are clear).
 std::optional<PacketType> peekPacketType(std::span<const std::uint8_t> datagram);
 // The member id of a client -> server datagram (bytes 2..5), or nullopt when shorter
 // than the client header.
 std::optional<std::uint32_t> peekMemberId(std::span<const std::uint8_t> datagram);
+// The clear header's size for a packet type: kClientHeaderBytes for client -> server
+// types, kServerHeaderBytes for server -> client ones (what sealing leaves in clear).
+std::size_t clearHeaderBytes(PacketType type);
 
 // Appends the datagram's bytes to out.
 void write(const HelloPacket& p, std::vector<std::uint8_t>& out);

@@ -21,7 +21,7 @@ constexpr std::array<int, 8> kRootBits = {0, 3, 5, 7, 9, 11, 13, 17};
 constexpr std::array<int, 7> kJointBits = {2, 3, 4, 5, 6, 7, 9};
 constexpr int kRawJointClass = 7;
 constexpr std::uint32_t kCodeMask = (1u << kQuatComponentBits) - 1u;
-constexpr std::size_t kMaxRecordBytes = kMaxDatagramBytes - kClientHeaderBytes;
+constexpr std::size_t kMaxRecordBytes = kMaxPlainDatagramBytes - kClientHeaderBytes;
 
 std::size_t slotOf(std::uint16_t sequence) {
   return static_cast<std::size_t>(sequence % kDeltaHistory);

@@ -11,6 +11,7 @@
 #include <glm/glm.hpp>
 
 #include "common/scene/seat_layout.hpp"
+#include "common/wire/datagram_crypto.hpp"
 #include "common/wire/endpoint.hpp"
 #include "server/core/collision_model.hpp"
 #include "server/core/handles.hpp"
@@ -60,10 +61,10 @@ struct OutFrame {
 // needs for UDP traffic and ticking).
 struct RoomCommand {
   enum class Kind {
-    kCreate,        // room, name
-    kClose,         // room (it is empty)
-    kAddMember,     // room, member, key, seat, joint_count and collision (0 and null until
-                    // the avatar is ready)
+    kCreate,     // room, name
+    kClose,      // room (it is empty)
+    kAddMember,  // room, member, uplink/downlink keys, seat, joint_count and collision (0 and null
+                 // until the avatar is ready)
     kRemoveMember,  // room, member
     kBindEndpoint,  // room, member, endpoint (UDP hello accepted)
     kSetAvatar,     // room, member, joint_count, collision
@@ -74,7 +75,8 @@ struct RoomCommand {
   Kind kind = Kind::kCreate;
   RoomId room;
   MemberId member;
-  std::uint64_t key = 0;
+  wire::AeadKey uplink_key{};    // kAddMember: the member's client -> server datagram key
+  wire::AeadKey downlink_key{};  // kAddMember: the server -> client key of the room's datagrams
   wire::Endpoint endpoint;
   int joint_count = 0;
   std::shared_ptr<const CollisionModel> collision;

@@ -225,9 +225,26 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
     return;
   }
 
+  // The UDP key exchange (WIRE.md §3.9): our half now, so that a bad public key is refused
+  // before anything is created; the keys once the member id is known.
+  auto exchange = wire::KeyExchange::generate();
+  if (!exchange) {
+    reject(conn, control::ErrorReply::SERVER_FULL, "key generation failed", now, fx, {}, 5.0f);
+    return;
+  }
+  auto shared = exchange->sharedSecret(
+      std::span(reinterpret_cast<const std::uint8_t*>(join.udp_public_key().data()),
+                join.udp_public_key().size()));
+  if (!shared) {
+    reject(conn, control::ErrorReply::BAD_JOIN,
+           "udp_public_key must be a 32-byte X25519 public key: " + shared.error().message, now,
+           fx);
+    return;
+  }
   // A resumed session (Join.resume_*): the stale member it replaces leaves first, so the
   // name and (when free) the seat pass to the new one. Only the holder of that member's id
-  // and key can do this: a name alone evicts nobody.
+  // and a proof from that member's resume secret over this Join's public key can do this: a
+  // name alone evicts nobody, and a proof seen on the wire is worth nothing with another key.
   int preferred_seat = -1;
   // The evicted member's reference to the avatar would free a file the new member needs:
   // held for the rest of this function (the new member takes its own).
@@ -243,7 +260,13 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
     Member* stale =
         member_ids_.live(join.resume_member_id()) ? findMember(join.resume_member_id()) : nullptr;
     if (stale != nullptr && it != room_by_name_.end() && stale->room.value == it->second &&
-        stale->name == join.name() && stale->key == join.resume_key() && stale->conn != conn) {
+        stale->name == join.name() && stale->conn != conn &&
+        wire::resumeProofMatches(
+            stale->keys.resume,
+            std::span(reinterpret_cast<const std::uint8_t*>(join.udp_public_key().data()),
+                      join.udp_public_key().size()),
+            std::span(reinterpret_cast<const std::uint8_t*>(join.resume_proof().data()),
+                      join.resume_proof().size()))) {
       preferred_seat = stale->seat;
       if (stored != nullptr) {
         store_.addRef(join.avatar_hash());
@@ -325,14 +348,25 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
     reject(conn, control::ErrorReply::SERVER_FULL, "the server is full", now, fx, {}, 5.0f);
     return;
   }
+  wire::PublicKey client_public{};
+  std::copy(join.udp_public_key().begin(), join.udp_public_key().end(), client_public.begin());
+  auto keys =
+      wire::deriveSessionKeys(*shared, client_public, exchange->publicKey(), mid, room->name);
+  if (!keys) {
+    member_ids_.release(mid);
+    reject(conn, control::ErrorReply::SERVER_FULL, "key derivation failed", now, fx, {}, 5.0f);
+    return;
+  }
   Member& m = members_[mid];
   m.id = MemberId{mid};
+  m.keys = *keys;
+  m.hello_in.key = keys->client_to_server;
+  m.hello_out.key = keys->server_hello;
   m.conn = conn;
   m.room = room->id;
   m.name = join.name();
   m.avatar_hash = join.avatar_hash();
   m.avatar_size = join.avatar_size();
-  m.key = newKey();
   auto free_seat = std::find(room->seat_taken.begin(), room->seat_taken.end(), false);
   if (preferred_seat >= 0 && static_cast<std::size_t>(preferred_seat) < room->seat_taken.size() &&
       !room->seat_taken[static_cast<std::size_t>(preferred_seat)]) {
@@ -355,7 +389,8 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
   add.kind = RoomCommand::Kind::kAddMember;
   add.room = room->id;
   add.member = m.id;
-  add.key = m.key;
+  add.uplink_key = m.keys.client_to_server;
+  add.downlink_key = m.keys.server_to_client;
   add.joint_count = m.joint_count;
   add.seat = seatPlacement(m.seat, config_.seat_layout);
   if (stored != nullptr) add.collision = stored->collision;
@@ -366,7 +401,7 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
   control::Welcome& w = *msg.mutable_welcome();
   w.set_protocol_version(kProtocolVersion);
   w.set_member_id(m.id.value);
-  w.set_udp_key(m.key);
+  w.set_udp_public_key(exchange->publicKey().data(), exchange->publicKey().size());
   w.set_tick_rate_hz(config_.tick_rate_hz);
   w.set_server_time(now);
   w.set_room(room->name);
@@ -600,17 +635,33 @@ bool Lobby::spawnProp(RoomRecord& room, const PropSpec& spec, MemberId requester
 
 void Lobby::onHello(std::span<const std::uint8_t> datagram, const wire::Endpoint& from, double now,
                     Effects& fx) {
-  wire::HelloPacket hello;
-  if (!wire::read(datagram, hello)) {
+  // Who claims to send (clear header), then the seal under that member's key with a fresh
+  // counter (WIRE.md §3.9): a hello nobody with the member's key sealed, or one seen
+  // before, is dropped unanswered, so a forged or replayed hello cannot move a member.
+  const auto claimed = wire::peekMemberId(datagram);
+  Member* m = claimed && member_ids_.live(*claimed) ? findMember(*claimed) : nullptr;
+  if (m == nullptr) {
+    drops_.drop(now, "hello for unknown member",
+                fmt::format("{} bytes from {}", datagram.size(), from.toString()));
+    return;
+  }
+  if (datagram.size() > wire::kMaxDatagramBytes) {
     drops_.drop(now, "malformed hello",
                 fmt::format("{} bytes from {}", datagram.size(), from.toString()));
     return;
   }
-  Member* m =
-      member_ids_.live(hello.header.member_id) ? findMember(hello.header.member_id) : nullptr;
-  if (m == nullptr || m->key != hello.header.key) {
-    drops_.drop(now, m == nullptr ? "hello for unknown member" : "hello with bad key",
-                fmt::format("member {:#x} from {}", hello.header.member_id, from.toString()));
+  scratch_datagram_.assign(datagram.begin(), datagram.end());
+  std::size_t plain_size = 0;
+  std::string_view refused;
+  if (!m->hello_in.open(wire::kClientHeaderBytes, scratch_datagram_, plain_size, refused)) {
+    drops_.drop(now, refused == "bad datagram tag" ? "hello with bad tag" : refused,
+                fmt::format("hello for member {:#x} from {}", m->id.value, from.toString()));
+    return;
+  }
+  wire::HelloPacket hello;
+  if (!wire::read(std::span(scratch_datagram_).first(plain_size), hello)) {
+    drops_.drop(now, "malformed hello",
+                fmt::format("{} bytes from {}", datagram.size(), from.toString()));
     return;
   }
   // An address is bound only once it has shown that it receives what is sent to it: the
@@ -634,6 +685,7 @@ void Lobby::onHello(std::span<const std::uint8_t> datagram, const wire::Endpoint
       OutDatagram& out = fx.datagrams.emplace_back();
       out.to = from;
       wire::write(challenge, out.bytes);
+      m->hello_out.seal(wire::kServerHeaderBytes, out.bytes);
       return;
     }
     auto taken = member_by_endpoint_.find(from);
@@ -668,6 +720,7 @@ void Lobby::onHello(std::span<const std::uint8_t> datagram, const wire::Endpoint
   OutDatagram& out = fx.datagrams.emplace_back();
   out.to = from;
   wire::write(ack, out.bytes);
+  m->hello_out.seal(wire::kServerHeaderBytes, out.bytes);
 }
 
 void Lobby::onDisconnect(ConnId conn, double now, Effects& fx) {

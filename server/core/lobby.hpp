@@ -5,12 +5,18 @@
 //
 // Bad input never takes more than its sender down: an unparsable, oversized or
 // out-of-order control frame, or an invalid upload, gets an ErrorReply and the
-// connection is closed (logged with the reason); a bad hello is dropped (counted,
-// logged) and never answered. A hello is answered with fewer bytes than it carried.
+// connection is closed (logged with the reason); a bad hello (unknown member, not sealed
+// with the member's key, replayed) is dropped (counted, logged) and never answered. A
+// hello is answered with no more bytes than it carried.
 //
-// Resuming: a Join carrying the id and UDP key of a live member with the same room and
-// name (Join.resume_member_id/resume_key, a client reconnecting before the server noticed
-// its old connection died) replaces that member: the stale one is closed (TIMEOUT,
+// Keys: a Join carries the client's X25519 public key; the Welcome the server's; the
+// member's datagram keys and resume secret follow (WIRE.md §3.9) and go to its room with
+// kAddMember. The lobby opens hellos and seals hello acks.
+//
+// Resuming: a Join carrying the id of a live member with the same room and name and a
+// proof from that member's resume secret (Join.resume_member_id/resume_proof, WIRE.md
+// §3.9; a client reconnecting before the server noticed its old connection died) replaces
+// that member: the stale one is closed (TIMEOUT,
 // "replaced by a resumed session") and the new one takes its seat when free. Without the
 // matching key a taken name is refused NAME_TAKEN as before. A UDP address change of a
 // member (NAT rebinding) is handled by onHello's challenge.
@@ -50,6 +56,7 @@
 #include <vector>
 
 #include "common/scene/seat_layout.hpp"
+#include "common/wire/datagram_crypto.hpp"
 #include "common/wire/endpoint.hpp"
 #include "common/wire/framing.hpp"
 #include "control.pb.h"
@@ -62,7 +69,7 @@
 
 namespace vistel::server {
 
-inline constexpr std::uint32_t kProtocolVersion = 3;
+inline constexpr std::uint32_t kProtocolVersion = 4;
 
 class Lobby {
  public:
@@ -110,10 +117,11 @@ class Lobby {
   std::vector<PropId> propsOf(std::string_view room) const;
   // The room of a live member.
   std::optional<RoomId> roomOf(MemberId member) const;
-  // A live member's UDP key (0 for an unknown member): for tests that play its client.
-  std::uint64_t keyOf(std::uint32_t member) const {
+  // A live member's session keys (nullptr for an unknown member): for tests that play its
+  // client.
+  const wire::SessionKeys* keysOf(std::uint32_t member) const {
     auto it = members_.find(member);
-    return it == members_.end() ? 0 : it->second.key;
+    return it == members_.end() ? nullptr : &it->second.keys;
   }
 
  private:
@@ -139,7 +147,9 @@ class Lobby {
     std::string name;
     std::string avatar_hash;
     std::uint64_t avatar_size = 0;
-    std::uint64_t key = 0;
+    wire::SessionKeys keys;          // from the Join's key exchange
+    wire::DatagramOpener hello_in;   // its hellos (client -> server key, replay window)
+    wire::DatagramSealer hello_out;  // our hello acks (the server hello key)
     int seat = 0;
     bool avatar_ready = false;
     int joint_count = 0;
@@ -239,6 +249,7 @@ class Lobby {
   std::function<std::int64_t()> unix_clock_;
   std::uint64_t seed_;
   std::mt19937_64 rng_;
+  std::vector<std::uint8_t> scratch_datagram_;  // a hello being opened (reused)
   std::random_device device_;
 };
 

@@ -12,6 +12,7 @@ RoomSettings roomSettings(const ServerConfig& config) {
   s.tick_rate_hz = config.tick_rate_hz;
   s.member_timeout_s = config.member_timeout_s;
   s.forward_interval_s = config.forward_interval_s;
+  s.max_capture_age_s = config.max_capture_age_s;
   s.near_members = config.interest_near_members;
   s.max_rate_divisor = config.interest_max_rate_divisor;
   s.world.gravity_mps2 = config.gravity_mps2;
@@ -49,7 +50,8 @@ void Room::apply(const RoomCommand& c, double now) {
       if (find(c.member.value) != nullptr) return;
       Member m;
       m.id = c.member;
-      m.key = c.key;
+      m.in.key = c.uplink_key;
+      m.out.key = c.downlink_key;
       m.joint_count = c.joint_count;
       m.decoder = wire::PostureDeltaDecoder(std::max(1, c.joint_count));
       m.last_heard = now;
@@ -106,31 +108,45 @@ void Room::apply(const RoomCommand& c, double now) {
   }
 }
 
-Room::Member* Room::authenticate(std::uint32_t member_id, std::uint64_t key,
-                                 const wire::Endpoint& from, double now, std::string_view what) {
-  Member* m = find(member_id);
+Room::Member* Room::authenticate(std::span<const std::uint8_t> datagram, const wire::Endpoint& from,
+                                 double now, std::string_view what,
+                                 std::span<const std::uint8_t>& plain) {
+  const auto member_id = wire::peekMemberId(datagram);
+  Member* m = member_id ? find(*member_id) : nullptr;
   if (m == nullptr) {
-    drops_.drop(now, "unknown member",
-                fmt::format("{} for member {:#x} from {}", what, member_id, from.toString()));
-    return nullptr;
-  }
-  if (m->key != key) {
-    drops_.drop(now, "bad key",
-                fmt::format("{} for member {:#x} from {}", what, member_id, from.toString()));
+    drops_.drop(
+        now, "unknown member",
+        fmt::format("{} for member {:#x} from {}", what, member_id.value_or(0), from.toString()));
     return nullptr;
   }
   if (!m->bound) {
     drops_.drop(now, "endpoint not bound",
-                fmt::format("{} for member {:#x} from {} before its hello", what, member_id,
+                fmt::format("{} for member {:#x} from {} before its hello", what, m->id.value,
                             from.toString()));
     return nullptr;
   }
   if (!(m->endpoint == from)) {
     drops_.drop(now, "wrong endpoint",
-                fmt::format("{} for member {:#x} from {}, bound to {}", what, member_id,
+                fmt::format("{} for member {:#x} from {}, bound to {}", what, m->id.value,
                             from.toString(), m->endpoint.toString()));
     return nullptr;
   }
+  // The seal (WIRE.md §3.9): a fresh counter, then the tag under the member's key. What
+  // fails was not sent by the member, or was sent before (a replay): dropped, counted.
+  if (datagram.size() > wire::kMaxDatagramBytes) {
+    drops_.drop(now, "oversized datagram",
+                fmt::format("{} of {} bytes from {}", what, datagram.size(), from.toString()));
+    return nullptr;
+  }
+  scratch_datagram_.assign(datagram.begin(), datagram.end());
+  std::size_t plain_size = 0;
+  std::string_view refused;
+  if (!m->in.open(wire::kClientHeaderBytes, scratch_datagram_, plain_size, refused)) {
+    drops_.drop(now, refused,
+                fmt::format("{} for member {:#x} from {}", what, m->id.value, from.toString()));
+    return nullptr;
+  }
+  plain = std::span(scratch_datagram_).first(plain_size);
   return m;
 }
 
@@ -149,17 +165,18 @@ void Room::onDatagram(std::span<const std::uint8_t> datagram, const wire::Endpoi
 
 void Room::onPosture(std::span<const std::uint8_t> datagram, const wire::Endpoint& from, double now,
                      Effects& fx) {
-  // The header first (who sends), then the delta-coded record against the sender's
-  // history (range-checked, exact length).
+  // The sender and the seal first, then the header, then the delta-coded record against
+  // the sender's history (range-checked, exact length).
+  std::span<const std::uint8_t> plain;
+  Member* m = authenticate(datagram, from, now, "posture", plain);
+  if (m == nullptr) return;
   wire::ClientHeader header;
   std::span<const std::uint8_t> coded;
-  if (!wire::readPostureDatagram(datagram, header, coded)) {
+  if (!wire::readPostureDatagram(plain, header, coded)) {
     drops_.drop(now, "malformed posture",
                 fmt::format("{} bytes from {}", datagram.size(), from.toString()));
     return;
   }
-  Member* m = authenticate(header.member_id, header.key, from, now, "posture");
-  if (m == nullptr) return;
   m->last_heard = now;
   if (m->joint_count == 0) {
     drops_.drop(now, "avatar not ready",
@@ -181,7 +198,29 @@ void Room::onPosture(std::span<const std::uint8_t> datagram, const wire::Endpoin
     return;
   }
   if (decoded.keyframe) m->want_keyframe = false;
-  if (!m->has_ack || wire::sequenceNewer(record.sequence, m->ack)) m->ack = record.sequence;
+
+  // Order: newer by 1..kMaxSequenceJump is news; a record farther from the stored one in
+  // either direction is a sender that skipped or started over (a bug, or a very long
+  // loss): only a keyframe may resynchronise the member there, so one wild sequence number
+  // never leaves the member's real stream looking old (frozen) for minutes.
+  bool resync = false;
+  if (m->has_ack) {
+    const auto ahead = static_cast<std::uint16_t>(record.sequence - m->ack);
+    const auto behind = static_cast<std::uint16_t>(m->ack - record.sequence);
+    if (ahead > kMaxSequenceJump && behind > kMaxSequenceJump) {
+      if (!decoded.keyframe) {
+        m->want_keyframe = true;
+        drops_.drop(now, "sequence jump",
+                    fmt::format("member {:#x}: sequence {} after {}", m->id.value, record.sequence,
+                                m->ack));
+        return;
+      }
+      resync = true;
+    }
+  }
+  if (!m->has_ack || resync || wire::sequenceNewer(record.sequence, m->ack)) {
+    m->ack = record.sequence;
+  }
   m->has_ack = true;
 
   // Semantic checks: the avatar's joint count, a plausible capture time, newest wins.
@@ -197,7 +236,12 @@ void Room::onPosture(std::span<const std::uint8_t> datagram, const wire::Endpoin
                 fmt::format("member {:#x}: {:.3f} s ahead", m->id.value, capture - now));
     return;
   }
-  if (m->has_posture && !wire::sequenceNewer(record.sequence, m->sequence)) {
+  if (capture < now - settings_.max_capture_age_s) {
+    drops_.drop(now, "capture time too old",
+                fmt::format("member {:#x}: {:.3f} s ago", m->id.value, now - capture));
+    return;
+  }
+  if (m->has_posture && !resync && !wire::sequenceNewer(record.sequence, m->sequence)) {
     return;  // duplicate or reordered: newest wins (normal on a lossy network, not logged)
   }
 
@@ -221,24 +265,25 @@ void Room::onPosture(std::span<const std::uint8_t> datagram, const wire::Endpoin
 
 void Room::onPing(std::span<const std::uint8_t> datagram, const wire::Endpoint& from, double now,
                   Effects& fx) {
+  std::span<const std::uint8_t> plain;
+  Member* m = authenticate(datagram, from, now, "ping", plain);
+  if (m == nullptr) return;
   wire::PingPacket ping;
-  if (!wire::read(datagram, ping)) {
+  if (!wire::read(plain, ping)) {
     drops_.drop(now, "malformed ping",
                 fmt::format("{} bytes from {}", datagram.size(), from.toString()));
     return;
   }
-  Member* m = authenticate(ping.header.member_id, ping.header.key, from, now, "ping");
-  if (m == nullptr) return;
   m->last_heard = now;
 
-  // Answer at once with the server clock (22 bytes for a 26-byte ping).
+  // Answer at once with the server clock (38 bytes sealed for a 42-byte ping).
   wire::PongPacket pong;
   pong.ping_id = ping.ping_id;
-  pong.client_time = ping.client_time;
   pong.server_time = now;
   OutDatagram& out = fx.datagrams.emplace_back();
   out.to = from;
   wire::write(pong, out.bytes);
+  m->out.seal(wire::kServerHeaderBytes, out.bytes);
 }
 
 double Room::nextWakeTime() const {
@@ -317,7 +362,7 @@ void Room::forward(double now, Effects& fx) {
   header.tick = tick_;
   header.server_time = now;
   for (std::size_t t = 0; t < n; ++t) {
-    const Member& to = members_[t];
+    Member& to = members_[t];
     if (!to.bound) continue;
     acknowledge(to, header);
     // The fresh records this member hears, in room order, packed into as few datagrams
@@ -329,8 +374,10 @@ void Room::forward(double now, Effects& fx) {
       const std::uint8_t divisor = interest_[t * n + f];
       if (!from.fresh || divisor == 0 || from.accepted % divisor != 0) continue;
       const std::size_t entry = wire::kSnapshotEntryOverhead + from.record_bytes.size();
-      if (out != nullptr && (out->bytes.size() + entry > wire::kMaxDatagramBytes || count == 255)) {
+      if (out != nullptr &&
+          (out->bytes.size() + entry > wire::kMaxPlainDatagramBytes || count == 255)) {
         wire::finishSnapshot(static_cast<std::uint8_t>(count), out->bytes);
+        to.out.seal(wire::kServerHeaderBytes, out->bytes);
         out = nullptr;
       }
       if (out == nullptr) {
@@ -344,7 +391,10 @@ void Room::forward(double now, Effects& fx) {
       ++count;
       ++entries_forwarded_;
     }
-    if (out != nullptr) wire::finishSnapshot(static_cast<std::uint8_t>(count), out->bytes);
+    if (out != nullptr) {
+      wire::finishSnapshot(static_cast<std::uint8_t>(count), out->bytes);
+      to.out.seal(wire::kServerHeaderBytes, out->bytes);
+    }
   }
   for (Member& m : members_) m.fresh = false;
   forward_pending_ = false;
@@ -356,7 +406,7 @@ void Room::sendWorld(double now, Effects& fx) {
   wire::SnapshotHeader header;
   header.tick = tick_;
   header.server_time = now;
-  for (const Member& to : members_) {
+  for (Member& to : members_) {
     if (!to.bound) continue;
     acknowledge(to, header);
     for (std::size_t part = 0; part < parts.size(); ++part) {
@@ -369,6 +419,7 @@ void Room::sendWorld(double now, Effects& fx) {
       wire::beginSnapshot(header, out.bytes);
       wire::appendSnapshotWorld(parts[part].bytes, out.bytes);
       wire::finishSnapshot(0, out.bytes);
+      to.out.seal(wire::kServerHeaderBytes, out.bytes);
     }
   }
 }

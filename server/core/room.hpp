@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "common/wire/datagram_crypto.hpp"
 #include "common/wire/endpoint.hpp"
 #include "common/wire/packets.hpp"
 #include "common/wire/posture_delta.hpp"
@@ -39,6 +40,7 @@ struct RoomSettings {
   double tick_rate_hz = 60.0;
   double member_timeout_s = 10.0;     // silence on UDP (from join, until the first packet)
   double forward_interval_s = 0.002;  // postures wait at most this long to be forwarded
+  double max_capture_age_s = 5.0;     // postures captured longer ago are dropped
   int near_members = 16;              // heard at full rate (and the size of each rate band)
   int max_rate_divisor = 4;           // the farthest are heard at 1 / this of their rate
   WorldSettings world;
@@ -68,10 +70,14 @@ class Room {
   // unknown members are ignored.
   void apply(const RoomCommand& command, double now);
 
-  // A posture or ping datagram addressed (by member id) to this room. Accepted only from
-  // a member's bound endpoint with its key; postures must carry the member's joint count
-  // and a newer sequence number than the last accepted one. Everything else is dropped
-  // with a counted, logged reason. A ping is answered with a pong (smaller than the ping).
+  // A sealed posture or ping datagram addressed (by member id) to this room. Accepted only
+  // from a member's bound endpoint, sealed with its uplink key under a counter its replay
+  // window has not seen (WIRE.md §3.9); postures must carry the member's joint count, a
+  // capture time within (now - max_capture_age_s, now + 1 s], and a sequence newer than
+  // the last accepted one by at most kMaxSequenceJump (farther only as a keyframe, which
+  // resynchronises). Everything else is dropped with a counted, logged reason. A ping is
+  // answered with a pong (smaller than the ping). Every datagram the room sends is sealed
+  // with the recipient's downlink key.
   void onDatagram(std::span<const std::uint8_t> datagram, const wire::Endpoint& from, double now,
                   Effects& fx);
 
@@ -95,9 +101,13 @@ class Room {
   const RoomWorld& world() const { return world_; }
 
  private:
+  // A posture sequence further than this from the last one decoded is a jump (Room::onDatagram).
+  static constexpr std::uint16_t kMaxSequenceJump = 1024;
+
   struct Member {
     MemberId id;
-    std::uint64_t key = 0;
+    wire::DatagramOpener in;   // its datagrams: uplink key, replay window
+    wire::DatagramSealer out;  // ours to it: downlink key, counter
     bool bound = false;
     wire::Endpoint endpoint;
     int joint_count = 0;   // 0 = avatar not ready: postures are refused
@@ -120,9 +130,11 @@ class Room {
                  Effects& fx);
   void onPing(std::span<const std::uint8_t> datagram, const wire::Endpoint& from, double now,
               Effects& fx);
-  // Common checks of a client datagram's sender; logs and returns nullptr on failure.
-  Member* authenticate(std::uint32_t member_id, std::uint64_t key, const wire::Endpoint& from,
-                       double now, std::string_view what);
+  // Common checks of a client datagram: a known member at its bound endpoint, sealed with
+  // its key under a fresh counter. On success `plain` is the opened plain layout (in a
+  // scratch buffer, valid until the next call); logs, counts and returns nullptr on failure.
+  Member* authenticate(std::span<const std::uint8_t> datagram, const wire::Endpoint& from,
+                       double now, std::string_view what, std::span<const std::uint8_t>& plain);
   // Sends every member the fresh postures its interest lets through.
   void forward(double now, Effects& fx);
   void sendWorld(double now, Effects& fx);
@@ -155,6 +167,7 @@ class Room {
   static void acknowledge(const Member& to, wire::SnapshotHeader& header);
   // Reused per datagram, so steady state allocates nothing.
   wire::PostureRecord scratch_record_;
+  std::vector<std::uint8_t> scratch_datagram_;  // a datagram being opened
 };
 
 }  // namespace vistel::server

@@ -273,7 +273,7 @@ void RoomWorld::writeParts() {
   // Split greedily: each part's section (its own body table and the pairs) must fit the
   // datagram beside the header (and, in part 0, the prop states).
   const std::size_t props_bytes = prop_records_.size() * wire::kPropStateBytes;
-  const std::size_t room = wire::kMaxDatagramBytes - wire::kSnapshotHeaderBytes;
+  const std::size_t room = wire::kMaxPlainDatagramBytes - wire::kSnapshotHeaderBytes;
   part_ends_.clear();
   truncated_ = false;
   int bodies_in_part = 0;

@@ -98,6 +98,7 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
   VISTEL_TRY(session.number("join_timeout_s", c.join_timeout_s, 0.1, 3600));
   VISTEL_TRY(session.number("forward_interval_s", c.forward_interval_s, 0, 0.1));
   VISTEL_TRY(session.number("stats_interval_s", c.stats_interval_s, 0, 86400));
+  VISTEL_TRY(session.number("max_capture_age_s", c.max_capture_age_s, 0.1, 3600));
   VISTEL_TRY(session.checkUnknown());
 
   ConfigTable limits(root, "limits", source_name);

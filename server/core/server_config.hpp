@@ -36,6 +36,7 @@ struct ServerConfig {
   double join_timeout_s = 5.0;        // a connection must send Join within this
   double forward_interval_s = 0.002;  // postures wait at most this long to be forwarded
   double stats_interval_s = 10.0;     // the server logs its load this often (0: never)
+  double max_capture_age_s = 5.0;     // postures captured longer ago than this are dropped
   // [limits]
   int max_rooms = 64;
   int max_members = 1024;  // over all rooms (<= 65535)

@@ -29,6 +29,12 @@ DatagramRoute routeDatagram(std::span<const std::uint8_t> datagram, const RoomRo
     route.reason = "not a vistel datagram";
     return route;
   }
+  // Every datagram is sealed (WIRE.md §3.9): shorter than a clear header and a tag, it
+  // cannot be one.
+  if (datagram.size() < wire::kClientHeaderBytes + wire::kSealOverheadBytes) {
+    route.reason = "truncated datagram";
+    return route;
+  }
   switch (*type) {
     case wire::PacketType::kHello:
       route.target = DatagramRoute::Target::kLobby;

@@ -16,6 +16,8 @@ std::string_view dropClassName(DropClass c) {
       return "rate";
     case DropClass::kBadPayload:
       return "bad payload";
+    case DropClass::kReplay:
+      return "replay";
     case DropClass::kOther:
       break;
   }
@@ -48,6 +50,15 @@ DropClass classifyDropReason(std::string_view reason) {
       {"avatar not ready", DropClass::kBadPayload},
       {"wrong joint count", DropClass::kBadPayload},
       {"capture time in the future", DropClass::kBadPayload},
+      // Sealed datagrams (proto/WIRE.md §3.9).
+      {"oversized datagram", DropClass::kBadHeader},
+      {"bad datagram tag", DropClass::kUnknownKey},
+      {"hello with bad tag", DropClass::kUnknownKey},
+      {"replayed datagram", DropClass::kReplay},
+      {"datagram too old", DropClass::kReplay},
+      {"invalid counter", DropClass::kReplay},
+      {"capture time too old", DropClass::kBadPayload},
+      {"sequence jump", DropClass::kBadPayload},
   };
   for (const Entry& e : kTable) {
     if (e.phrase == reason) return e.cls;

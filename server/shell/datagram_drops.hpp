@@ -4,10 +4,11 @@
 // without flooding the log.
 //
 // The classes: "bad header" (not a vistel datagram, truncated, a client-bound type),
-// "unknown key" (no such member, or the wrong key), "unverified address" (before the
-// member's hello, or from another address than the bound one), "rate" (a sender over a
-// rate limit), "bad payload" (a header that checks out over a body that does not) and
-// "other".
+// "unknown key" (no such member, or not sealed with its key: a bad tag), "unverified
+// address" (before the member's hello, or from another address than the bound one),
+// "rate" (a sender over a rate limit), "bad payload" (a header and seal that check out
+// over a body that does not), "replay" (a counter the receiver has seen, or one older
+// than its window; proto/WIRE.md §3.9) and "other".
 //
 // Thread-safe: the UDP receive handler and every room strand record drops; counts are
 // relaxed atomics, the log interval sits behind a mutex taken only when a drop happens.
@@ -24,8 +25,16 @@
 
 namespace vistel::server {
 
-enum class DropClass { kBadHeader, kUnknownKey, kUnverifiedAddress, kRate, kBadPayload, kOther };
-inline constexpr int kDropClassCount = 6;
+enum class DropClass {
+  kBadHeader,
+  kUnknownKey,
+  kUnverifiedAddress,
+  kRate,
+  kBadPayload,
+  kOther,
+  kReplay,
+};
+inline constexpr int kDropClassCount = 7;
 
 // The metric label of a class ("bad header", ...).
 std::string_view dropClassName(DropClass c);

@@ -18,6 +18,9 @@
 // every prop's state at any time is safe; the scene mapping of interactions fails or
 // succeeds cleanly.
 //
+// The victim's UDP key pair is fixed (SessionSettings::fixed_udp_private_key), so the
+// recorded datagrams, sealed for it, open in every replay; mutated ones mostly do not.
+//
 // Seeds: what a real ServerCore sent to one client (the "victim") in a session with a
 // second member: the Welcome after the avatar upload, the hello ack, pongs, rosters, the
 // other member's avatar (fetched), snapshots of its postures, a ball and the interaction
@@ -100,6 +103,11 @@ net::SessionSettings settingsFor(const std::string& name, const EncodedAvatar& a
   s.avatar_joint_count = avatar.joints;
   s.max_avatar_bytes = 1u << 16;
   s.max_frame_bytes = 1u << 17;
+  // The same UDP key pair in the capture and every replay, so that the recorded Welcome
+  // gives the keys the recorded datagrams were sealed with (proto/WIRE.md §3.9).
+  for (std::size_t i = 0; i < s.fixed_udp_private_key.size(); ++i) {
+    s.fixed_udp_private_key[i] = static_cast<std::uint8_t>(name.size() * 31 + i + 1);
+  }
   return s;
 }
 
@@ -263,6 +271,11 @@ std::vector<fuzz::Seed> makeSeeds() {
       full.script.begin(), full.script.begin() + static_cast<std::ptrdiff_t>(full.welcomed_at));
   cut.push_back(kAdvance | (31 << 3));
   cut.push_back(kDisconnect);
+  // The replay opens the recorded (sealed) datagrams: the other member's postures, the
+  // ball and the contact lists all arrive.
+  const Outcome replayed = runScript(full.script);
+  check(replayed.members == 2 && replayed.props >= 1 && replayed.interactions > 0,
+        "the seed session replays with its datagrams opened");
 
   // A refusal: the server's ErrorReply to a join of a protocol it does not speak.
   control::ServerMessage refusal;

@@ -7,12 +7,14 @@
 //   0 connect                 1 stream bytes: u16 length, bytes     2 datagram: u16, bytes
 //   3 disconnect              4 advance time by u8 * 5 ms, update    5 hello: u8 attempt
 //   6 posture: u8 joints, u16 sequence, then 4 bytes per joint       7 ping: u32 id
-// Hello, posture and ping use the member id and UDP key of the peer's last Welcome (what
-// the fuzzer could not guess), with everything else from the input. Every operation also
+// Hello, posture and ping use the member id of the peer's last Welcome and are sealed with
+// its keys (proto/WIRE.md §3.9: what the fuzzer could not guess; taken from the lobby), with
+// everything else from the input; raw datagrams (op 2) go as they are. Every operation also
 // advances the clock by 1 ms. Closes the server asks for are carried out (onDisconnect).
 // Properties: nothing crashes, throws, leaks or reads out of bounds; every frame the
-// server writes is a well-formed ServerMessage, every datagram a well-formed server ->
-// client packet of at most kMaxDatagramBytes.
+// server writes is a well-formed ServerMessage, every datagram a server -> client packet
+// of at most kMaxDatagramBytes sealed with its recipient's key that opens to a well-formed
+// packet.
 // Seeds: scripted sessions (join with an avatar upload, a second member reusing the
 // avatar, hellos, postures, pings, requests, a ball spawn, leaving) written by the same
 // encoder. The avatar carries an implicit model and the rooms start with a ball, so every
@@ -30,6 +32,7 @@
 #include <spdlog/spdlog.h>
 
 #include "common/avatar/avatar_io.hpp"
+#include "common/wire/datagram_crypto.hpp"
 #include "common/wire/framing.hpp"
 #include "common/wire/packets.hpp"
 #include "control.pb.h"
@@ -140,6 +143,12 @@ control::ClientMessage joinMessage(const std::string& name, const std::string& h
   join.set_name(name);
   join.set_avatar_hash(hash);
   join.set_avatar_size(size);
+  // A valid X25519 public key (RFC 7748 §6.1, Alice's); the fuzzer's peers take their
+  // session keys from the lobby.
+  join.set_udp_public_key(std::string{
+      '\x85', '\x20', '\xf0', '\x09', '\x89', '\x30', '\xa7', '\x54', '\x74', '\x8b', '\x7d',
+      '\xdc', '\xb4', '\x3e', '\xf7', '\x5a', '\x0d', '\xbf', '\x3a', '\x0d', '\x26', '\x38',
+      '\x1a', '\xf4', '\xeb', '\xa4', '\xa9', '\x8e', '\xaa', '\x9b', '\x4e', '\x6a'});
   return msg;
 }
 
@@ -170,6 +179,7 @@ std::vector<fuzz::Seed> makeSeeds() {
     one.message(0, chunk);
   }
   one.hello(0);
+  one.hello(0);  // echoes the challenge: bound
   control::ClientMessage spawn;
   spawn.mutable_spawn_prop()->set_kind(control::SpawnProp::BALL);
   one.message(0, spawn);
@@ -191,6 +201,7 @@ std::vector<fuzz::Seed> makeSeeds() {
   ScriptWriter two;
   two.op(kConnect, 1);
   two.message(1, joinMessage("bob", hash, avatar.size()));
+  two.hello(1);
   two.hello(1);
   two.posture(1, joints, 9);
   control::ClientMessage request;
@@ -226,9 +237,16 @@ struct Peer {
   server::ConnId conn = 0;  // 0: not connected
   bool welcomed = false;
   std::uint32_t member_id = 0;
-  std::uint64_t key = 0;
+  std::uint64_t counter = 0;  // the last uplink counter used
   wire::Endpoint endpoint;
 };
+
+// Seals a peer's datagram as its client would (no keys, e.g. before a Welcome: as is).
+void sealFor(const server::ServerCore& core, Peer& peer, std::vector<std::uint8_t>& datagram) {
+  if (const wire::SessionKeys* keys = core.lobby().keysOf(peer.member_id)) {
+    wire::sealDatagram(keys->client_to_server, ++peer.counter, wire::kClientHeaderBytes, datagram);
+  }
+}
 
 // Checks what the server asked to send, learns Welcomes, carries out closes. With
 // VISTEL_FUZZ_TRACE set, prints what it sees (to follow a crashing input).
@@ -255,17 +273,31 @@ void drain(server::ServerCore& core, std::array<Peer, kPeers>& peers, double now
           if (p.conn != f.conn) continue;
           p.welcomed = true;
           p.member_id = msg.welcome().member_id();
-          p.key = msg.welcome().udp_key();
+          p.counter = 0;
         }
       }
     }
-    for (const server::OutDatagram& d : fx.datagrams) {
-      check(d.bytes.size() <= wire::kMaxDatagramBytes, "datagrams fit kMaxDatagramBytes");
-      const auto type = wire::peekPacketType(d.bytes);
+    for (const server::OutDatagram& sealed : fx.datagrams) {
+      check(sealed.bytes.size() <= wire::kMaxDatagramBytes, "datagrams fit kMaxDatagramBytes");
+      const auto type = wire::peekPacketType(sealed.bytes);
       check(type.has_value(), "datagrams have a known type");
       if (trace)
-        std::printf("%.3f %s <- datagram type %#x, %zu bytes\n", now, d.to.toString().c_str(),
-                    static_cast<unsigned>(*type), d.bytes.size());
+        std::printf("%.3f %s <- datagram type %#x, %zu bytes\n", now, sealed.to.toString().c_str(),
+                    static_cast<unsigned>(*type), sealed.bytes.size());
+      // Open it with the recipient's keys (a peer's member); skipped when the member is gone.
+      const wire::SessionKeys* keys = nullptr;
+      for (const Peer& p : peers) {
+        if (p.endpoint == sealed.to && p.member_id != 0) keys = core.lobby().keysOf(p.member_id);
+      }
+      if (keys == nullptr) continue;
+      server::OutDatagram d{sealed.to, sealed.bytes};
+      std::uint64_t counter = 0;
+      std::size_t plain_size = 0;
+      check(wire::openDatagram(
+                *type == wire::PacketType::kHelloAck ? keys->server_hello : keys->server_to_client,
+                wire::kServerHeaderBytes, d.bytes, counter, plain_size),
+            "datagrams are sealed with their recipient's key");
+      d.bytes.resize(plain_size);
       if (*type == wire::PacketType::kHelloAck) {
         wire::HelloAckPacket p;
         check(wire::read(d.bytes, p), "HelloAck reads back");
@@ -355,25 +387,27 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         datagram.clear();
         wire::write(
             wire::HelloPacket{
-                {peer.member_id, peer.key}, script.u8(), challenges()[peer.endpoint.toString()]},
+                {peer.member_id, 0}, script.u8(), challenges()[peer.endpoint.toString()]},
             datagram);
+        sealFor(core, peer, datagram);
         core.onDatagram(datagram, peer.endpoint, now);
         break;
       case kPosture: {
-        wire::PosturePacket p{{peer.member_id, peer.key}, {}};
+        wire::PosturePacket p{{peer.member_id, 0}, {}};
         p.record.joint_count = script.u8();
         p.record.sequence = script.u16();
         p.record.time = wire::toWireTime(now);
         for (int j = 0; j < p.record.joint_count; ++j) p.record.rotations[j] = script.u32();
         datagram.clear();
         wire::write(p, datagram);
+        sealFor(core, peer, datagram);
         core.onDatagram(datagram, peer.endpoint, now);
         break;
       }
       case kPing:
         datagram.clear();
-        wire::write(wire::PingPacket{{peer.member_id, peer.key}, script.u32(), now - 0.01},
-                    datagram);
+        wire::write(wire::PingPacket{{peer.member_id, 0}, script.u32(), now - 0.01}, datagram);
+        sealFor(core, peer, datagram);
         core.onDatagram(datagram, peer.endpoint, now);
         break;
     }

@@ -6,7 +6,12 @@
 //   - as a TCP byte stream cut into pieces (fuzz::feedInChunks): FrameDecoder returns
 //     exactly the frames a one-pass reading of the whole stream finds, breaks exactly when
 //     that reading meets an oversized length, and keeps the rest buffered.
-// Seeds: datagrams of every type and framed streams written by the codec itself.
+//   - as a sealed datagram (datagram_crypto.hpp, WIRE.md §3.9) under a fixed test key:
+//     opening never reads outside the input, a datagram that opens is one sealed with that
+//     key, and every plain datagram a reader accepts seals and opens back to itself (and
+//     not with a changed byte).
+// Seeds: datagrams of every type (plain and sealed) and framed streams written by the
+// codec itself.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -15,6 +20,7 @@
 #include <vector>
 
 #include "common/anim/posture.hpp"
+#include "common/wire/datagram_crypto.hpp"
 #include "common/wire/framing.hpp"
 #include "common/wire/packets.hpp"
 #include "common/wire/posture_codec.hpp"
@@ -27,6 +33,13 @@ using namespace vistel::wire;
 using fuzz::check;
 
 constexpr std::size_t kMaxFrame = 256;  // FrameDecoder's limit in this target
+
+// The key sealed seeds use and inputs are opened with.
+AeadKey fuzzKey() {
+  AeadKey k{};
+  for (std::size_t i = 0; i < k.size(); ++i) k[i] = static_cast<std::uint8_t>(0xA0 + i);
+  return k;
+}
 
 // The frames of a TCP stream read in one pass: the reference FrameDecoder must agree with.
 struct Framing {
@@ -82,15 +95,23 @@ std::vector<fuzz::Seed> makeSeeds() {
   std::vector<fuzz::Seed> seeds;
   const ClientHeader header{7, 0x0123456789abcdefull};
   addPacket(seeds, "hello.bin", HelloPacket{header, 3, 0x0102030405060708ull});
-  addPacket(seeds, "posture_5.bin", PosturePacket{header, sampleRecord(5, 42)});
+  const auto posture =
+      addPacket(seeds, "posture_5.bin", PosturePacket{header, sampleRecord(5, 42)});
   addPacket(seeds, "posture_52.bin", PosturePacket{header, sampleRecord(52, 65535)});
   addPacket(seeds, "ping.bin", PingPacket{header, 9, 1.25});
-  addPacket(seeds, "hello_ack.bin", HelloAckPacket{7, 3, 0});
-  const std::vector<std::uint8_t> pong = addPacket(seeds, "pong.bin", PongPacket{9, 1.25, 100.5});
+  addPacket(seeds, "hello_ack.bin", HelloAckPacket{7, 3, 0, 5});
+  const std::vector<std::uint8_t> pong = addPacket(seeds, "pong.bin", PongPacket{9, 100.5, 6});
+  // Sealed: what travels.
+  std::vector<std::uint8_t> sealed = posture;
+  check(sealDatagram(fuzzKey(), 11, kClientHeaderBytes, sealed), "a seed posture seals");
+  seeds.push_back({"sealed_posture_5.bin", sealed});
+  sealed = pong;
+  check(sealDatagram(fuzzKey(), 12, kServerHeaderBytes, sealed), "a seed pong seals");
+  seeds.push_back({"sealed_pong.bin", sealed});
 
   // A snapshot of two members, a prop and a two-part interaction list's first part.
   std::vector<std::uint8_t> snapshot, record, world;
-  SnapshotHeader snapshot_header{77, 100.0, 0, 1, 0, 2};
+  SnapshotHeader snapshot_header{77, 100.0, 0, 1, 0, 2, 0, 0, 13};
   beginSnapshot(snapshot_header, snapshot);
   writeRecord(sampleRecord(3, 1), record);
   appendSnapshotEntry(7, record, snapshot);
@@ -111,6 +132,9 @@ std::vector<fuzz::Seed> makeSeeds() {
             read_back.interactions.pairs.size() == 3,
         "the seed snapshot reads back");
   seeds.push_back({"snapshot_2.bin", snapshot});
+  sealed = snapshot;
+  check(sealDatagram(fuzzKey(), 14, kServerHeaderBytes, sealed), "a seed snapshot seals");
+  seeds.push_back({"sealed_snapshot_2.bin", sealed});
 
   // TCP streams: frames of datagram bytes, an empty frame, an oversized length.
   std::vector<std::uint8_t> stream;
@@ -141,11 +165,48 @@ void checkRecord(const PostureRecord& record, double reference) {
         "decoded root and time are finite");
 }
 
+// An accepted plain datagram seals (with a counter) and opens back to itself; with any
+// byte changed it does not open.
+void checkSealRoundTrip(std::span<const std::uint8_t> plain, PacketType type,
+                        std::uint8_t flip_at) {
+  const std::size_t clear = clearHeaderBytes(type);
+  std::vector<std::uint8_t> sealed(plain.begin(), plain.end());
+  check(sealDatagram(fuzzKey(), 1 + flip_at, clear, sealed), "an accepted datagram seals");
+  check(sealed.size() == plain.size() + kAeadTagBytes, "sealing adds the tag");
+  std::vector<std::uint8_t> opened = sealed;
+  std::uint64_t counter = 0;
+  std::size_t plain_size = 0;
+  check(openDatagram(fuzzKey(), clear, opened, counter, plain_size), "a sealed datagram opens");
+  check(counter == 1u + flip_at && plain_size == plain.size(), "opening gives counter and size");
+  check(
+      std::ranges::equal(std::span(opened).first(plain_size).subspan(clear), plain.subspan(clear)),
+      "opening gives the body back");
+  std::vector<std::uint8_t> bad = sealed;
+  bad[flip_at % bad.size()] ^= 0x10;
+  check(!openDatagram(fuzzKey(), clear, bad, counter, plain_size), "a changed byte is rejected");
+}
+
+// Opening arbitrary bytes: bounded, and only what was sealed with the key opens.
+void checkOpen(std::span<const std::uint8_t> bytes) {
+  for (std::size_t clear : {kClientHeaderBytes, kServerHeaderBytes}) {
+    std::vector<std::uint8_t> buffer(bytes.begin(), bytes.end());
+    std::uint64_t counter = 0;
+    std::size_t plain_size = 0;
+    if (!openDatagram(fuzzKey(), clear, buffer, counter, plain_size)) continue;
+    check(plain_size + kAeadTagBytes == bytes.size(), "an opened datagram loses its tag only");
+    check(counter == peekCounter(bytes, clear), "the counter is the clear header's");
+    std::vector<std::uint8_t> again(buffer.begin(), buffer.begin() + static_cast<long>(plain_size));
+    check(sealDatagram(fuzzKey(), counter, clear, again) && std::ranges::equal(again, bytes),
+          "what opens seals back to the same bytes");
+  }
+}
+
 // Reads the datagram as a Packet; when accepted, checks write/measure/peek agree.
 template <typename Packet>
 std::optional<Packet> readExactly(std::span<const std::uint8_t> bytes, PacketType type) {
   Packet packet;
   if (!read(bytes, packet)) return std::nullopt;
+  checkSealRoundTrip(bytes, type, bytes.empty() ? 0 : bytes.back());
   std::vector<std::uint8_t> again;
   write(packet, again);
   check(std::ranges::equal(again, bytes), "an accepted datagram writes back to its bytes");
@@ -196,7 +257,9 @@ void checkDatagram(std::span<const std::uint8_t> bytes) {
     std::vector<std::uint8_t> again;
     write(snapshot, again);
     check(std::ranges::equal(again, bytes), "what reads back writes the same bytes");
+    checkSealRoundTrip(bytes, PacketType::kSnapshot, bytes.back());
   }
+  checkOpen(bytes);
 }
 
 // ---- TCP framing -------------------------------------------------------------------------

@@ -14,6 +14,7 @@
 
 #include "common/avatar/avatar_io.hpp"
 #include "common/base/file.hpp"
+#include "common/wire/datagram_crypto.hpp"
 #include "common/wire/packets.hpp"
 #include "tests/integration/http_get.hpp"
 #include "tests/integration/program.hpp"
@@ -94,27 +95,31 @@ TEST(LimitsCli, ConnectionsPastThePerAddressLimitAreRefusedAtAcceptAndCounted) {
   // Datagrams the server cannot route are counted by class, not only logged.
   sendDatagram(port, {0x01, 0x02, 0x03});
   sendDatagram(port, {0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff});
-  // A ping (routed by member id) and a hello (the lobby's) for a member that does not exist.
+  // A ping (routed by member id) and a hello (the lobby's) for a member that does not exist
+  // (sealed, with some key: proto/WIRE.md §3.9).
+  const wire::AeadKey guessed{};
   std::vector<std::uint8_t> ping;
   wire::PingPacket ping_packet;
   ping_packet.header.member_id = 0x00070007;
   wire::write(ping_packet, ping);
+  wire::sealDatagram(guessed, 1, wire::kClientHeaderBytes, ping);
   sendDatagram(port, ping);
-  // ... and a ping in a member's room with the wrong key (the room drops it).
+  // ... and a hello for a real member not sealed with its key (the lobby drops it).
   ASSERT_TRUE(
       test::sendControl(first, test::joinRequest("lab", "raw", std::string(64, 'a'), 5000)));
   const auto welcome = test::receiveControl(first, 10);
   ASSERT_TRUE(welcome.has_value() && welcome->has_welcome()) << server.log();
   std::vector<std::uint8_t> forged;
-  wire::PingPacket forged_packet;
+  wire::HelloPacket forged_packet;
   forged_packet.header.member_id = welcome->welcome().member_id();
-  forged_packet.header.key = welcome->welcome().udp_key() ^ 1u;
   wire::write(forged_packet, forged);
+  wire::sealDatagram(guessed, 1, wire::kClientHeaderBytes, forged);
   sendDatagram(port, forged);
   std::vector<std::uint8_t> hello;
   wire::HelloPacket hello_packet;
   hello_packet.header.member_id = 0x00070007;
   wire::write(hello_packet, hello);
+  wire::sealDatagram(guessed, 2, wire::kClientHeaderBytes, hello);
   sendDatagram(port, hello);
   std::string text;
   for (int i = 0; i < 100; ++i) {
@@ -181,7 +186,9 @@ TEST(ProgramsCli, EveryProgramPrintsItsVersion) {
     EXPECT_EQ(p.wait(20.0), 0) << program << ": " << p.log();
     EXPECT_NE(p.log().find(std::string(program) + " " + VISTEL_VERSION), std::string::npos)
         << p.log();
-    EXPECT_NE(p.log().find("datagram wire 3"), std::string::npos) << p.log();
+    EXPECT_NE(p.log().find("datagram wire " + std::to_string(wire::kWireVersion)),
+              std::string::npos)
+        << p.log();
   }
 }
 

@@ -62,12 +62,17 @@ inline std::optional<control::ServerMessage> receiveControl(int fd, int timeout_
   return answer;
 }
 
-// A Join of protocol version 3 for room `room` with an avatar of this hash and size.
+// A Join of protocol version 4 for room `room` with an avatar of this hash and size.
 inline control::ClientMessage joinRequest(const std::string& room, const std::string& name,
                                           const std::string& hash, std::uint64_t size) {
   control::ClientMessage msg;
   control::Join& join = *msg.mutable_join();
-  join.set_protocol_version(3);
+  join.set_protocol_version(4);
+  // A valid X25519 public key (RFC 7748 §6.1, Alice's): these joins never use UDP.
+  join.set_udp_public_key(std::string{
+      '\x85', '\x20', '\xf0', '\x09', '\x89', '\x30', '\xa7', '\x54', '\x74', '\x8b', '\x7d',
+      '\xdc', '\xb4', '\x3e', '\xf7', '\x5a', '\x0d', '\xbf', '\x3a', '\x0d', '\x26', '\x38',
+      '\x1a', '\xf4', '\xeb', '\xa4', '\xa9', '\x8e', '\xaa', '\x9b', '\x4e', '\x6a'});
   join.set_room(room);
   join.set_name(name);
   join.set_avatar_hash(hash);

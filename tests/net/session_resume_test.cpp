@@ -1,7 +1,8 @@
 // Resuming a session and NAT rebinding (issue 20, finding 7) over the simulated network:
 // a client whose connection died without the server noticing joins again with the
-// previous Welcome's member id and key (Join.resume_*) and replaces its stale member
-// instead of being refused the name; a stranger with the name but not the key cannot;
+// previous Welcome's member id and a proof from that session's resume secret
+// (Join.resume_*) and replaces its stale member instead of being refused the name; a
+// stranger with the name but not the secret cannot;
 // a client whose UDP address changes says hello again when the server's datagrams stop,
 // answers the challenge sent to its new address, and keeps its member.
 #include <gtest/gtest.h>
@@ -58,7 +59,7 @@ TEST_F(ResumeFixture, ResumingReplacesTheStaleMemberAndKeepsItsSeat) {
   net.client(old).connected = false;
   auto settings = test::sessionFor("r", "ada", avatar, 5);
   settings.resume_member_id = old_id;
-  settings.resume_key = net.session(old).udpKey();
+  settings.resume_secret = net.session(old).resumeSecret();
   const auto resumed = net.addClient(settings);
   net.connect(resumed);
   run(net, 1.0);
@@ -89,7 +90,7 @@ TEST_F(ResumeFixture, ResumingAloneKeepsTheRoomsAvatarFile) {
   net.client(old).connected = false;
   auto settings = test::sessionFor("r", "ada", avatar, 5);
   settings.resume_member_id = net.session(old).memberId();
-  settings.resume_key = net.session(old).udpKey();
+  settings.resume_secret = net.session(old).resumeSecret();
   const auto resumed = net.addClient(settings);
   net.connect(resumed);
   run(net, 1.0);
@@ -107,10 +108,12 @@ TEST_F(ResumeFixture, ANameWithoutTheKeyEvictsNobody) {
   run(net, 1.0);
   ASSERT_EQ(net.session(owner).state(), net::SessionState::kLive);
 
-  // A stranger knows the name and the member id (both in every roster), not the key.
+  // A stranger knows the name and the member id (both in every roster), not the resume
+  // secret (derived from the key exchange; it never travels).
   auto settings = test::sessionFor("r", "ada", avatar, 5);
   settings.resume_member_id = net.session(owner).memberId();
-  settings.resume_key = net.session(owner).udpKey() ^ 1u;
+  settings.resume_secret = net.session(owner).resumeSecret();
+  settings.resume_secret[0] ^= 1u;
   const auto stranger = net.addClient(settings);
   net.connect(stranger);
   run(net, 1.0);

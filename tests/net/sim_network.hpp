@@ -115,6 +115,14 @@ class SimNetwork {
   // Frames the server sent to raw connections, and whether it closed them.
   const std::vector<std::uint8_t>& rawReceived(server::ConnId conn) { return raw_in_[conn]; }
   bool rawClosed(server::ConnId conn) const { return raw_closed_.count(conn) > 0; }
+  // A sniffer on the uplinks: from sniff(true) on, a copy of every datagram a client sends
+  // (client index, bytes), as it left the client.
+  struct Sniffed {
+    std::size_t client;
+    std::vector<std::uint8_t> bytes;
+  };
+  void sniff(bool on) { sniffing_ = on; }
+  const std::vector<Sniffed>& sniffed() const { return sniffed_; }
   // Datagrams the server sent to endpoints that are not clients.
   std::vector<std::vector<std::uint8_t>>& rawDatagrams(const wire::Endpoint& to) {
     return raw_datagrams_[to.toString()];
@@ -242,6 +250,7 @@ class SimNetwork {
     }
     for (auto& d : out.datagrams) {
       if (tap) tap(d);
+      if (sniffing_) sniffed_.push_back({i, d});
       sendDatagram(c.up, [this, from = c.endpoint, bytes = std::move(d)] {
         server_.onDatagram(bytes, from, now_);
       });
@@ -261,6 +270,8 @@ class SimNetwork {
   std::map<std::pair<double, std::uint64_t>, std::function<void()>> events_;
   std::uint64_t next_event_ = 0;
   server::ConnId next_conn_ = 100000;  // reconnect()'s connections
+  bool sniffing_ = false;
+  std::vector<Sniffed> sniffed_;
   std::uint64_t lost_ = 0;
   std::uint64_t sent_ = 0;
   std::map<server::ConnId, std::vector<std::uint8_t>> raw_in_;

@@ -7,6 +7,7 @@
 #include <spdlog/spdlog.h>
 
 #include "client/net/prop_track.hpp"
+#include "common/wire/datagram_crypto.hpp"
 #include "common/wire/packets.hpp"
 #include "tests/net/sim_network.hpp"
 #include "tests/net/synthetic_avatar.hpp"
@@ -69,11 +70,17 @@ class InteractionAssembly : public ::testing::Test {
     }
     std::vector<std::uint8_t> bytes;
     wire::write(s, bytes);
+    // Sealed as the room would (WIRE.md §3.9), with counters past the room's own.
+    const wire::SessionKeys* keys = net_.server().lobby().keysOf(net_.session(c_).memberId());
+    EXPECT_NE(keys, nullptr);
+    if (keys == nullptr) return;
+    wire::sealDatagram(keys->server_to_client, counter_++, wire::kServerHeaderBytes, bytes);
     net_.session(c_).onDatagram(bytes, net_.localTime(c_));
   }
 
   SimNetwork net_;
   std::size_t c_ = 0;
+  std::uint64_t counter_ = std::uint64_t{1} << 32;
 };
 
 TEST_F(InteractionAssembly, AListIsPublishedOnlyWhenAllItsPartsArrive) {

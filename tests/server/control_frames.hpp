@@ -32,6 +32,12 @@ inline std::vector<control::ServerMessage> messagesOf(const std::vector<std::uin
   return out;
 }
 
+// A valid X25519 public key (RFC 7748 §6.1, Alice's) for joins that never use UDP.
+inline const std::string kTestUdpPublicKey = {
+    '\x85', '\x20', '\xf0', '\x09', '\x89', '\x30', '\xa7', '\x54', '\x74', '\x8b', '\x7d',
+    '\xdc', '\xb4', '\x3e', '\xf7', '\x5a', '\x0d', '\xbf', '\x3a', '\x0d', '\x26', '\x38',
+    '\x1a', '\xf4', '\xeb', '\xa4', '\xa9', '\x8e', '\xaa', '\x9b', '\x4e', '\x6a'};
+
 inline control::ClientMessage joinMessage(const std::string& room, const std::string& name,
                                           const std::string& hash, std::uint64_t size,
                                           std::uint32_t version) {
@@ -42,6 +48,7 @@ inline control::ClientMessage joinMessage(const std::string& room, const std::st
   j.set_name(name);
   j.set_avatar_hash(hash);
   j.set_avatar_size(size);
+  j.set_udp_public_key(kTestUdpPublicKey);
   return msg;
 }
 

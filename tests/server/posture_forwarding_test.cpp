@@ -13,6 +13,7 @@
 #include "common/wire/posture_delta.hpp"
 #include "server/core/room.hpp"
 #include "tests/net/synthetic_avatar.hpp"
+#include "tests/server/sealed_datagrams.hpp"
 
 namespace vistel::server {
 namespace {
@@ -31,7 +32,7 @@ void seat(Room& room, int n) {
     c.kind = RoomCommand::Kind::kAddMember;
     c.room = room.id();
     c.member = MemberId{memberId(i)};
-    c.key = 500u + static_cast<std::uint64_t>(i);
+    test::setTestKeys(c);
     c.seat = seatPlacement(i, SeatLayout{});
     c.joint_count = kJoints;
     room.apply(c, 0.0);
@@ -43,12 +44,12 @@ void seat(Room& room, int n) {
 
 std::vector<std::uint8_t> postureFrom(int i, int sequence, double time) {
   wire::PosturePacket p;
-  p.header = {memberId(i), 500u + static_cast<std::uint64_t>(i)};
+  p.header = {memberId(i), 0};
   EXPECT_TRUE(wire::encodePostureRecord(test::syntheticPosture(time + i),
                                         static_cast<std::uint16_t>(sequence), time, p.record));
   std::vector<std::uint8_t> out;
   wire::write(p, out);
-  return out;
+  return test::sealAs(memberId(i), out);
 }
 
 // (recipient index, sender member id) -> entries, over the datagrams in fx; world
@@ -61,8 +62,8 @@ struct Delivered {
 void tally(const Effects& fx, Delivered& d) {
   wire::Snapshot snapshot;
   for (const OutDatagram& out : fx.datagrams) {
-    ASSERT_TRUE(wire::readSnapshot(out.bytes, snapshot));
     const int to = out.to.port - 20000;
+    ASSERT_TRUE(wire::readSnapshot(test::openFor(memberId(to), out.bytes), snapshot));
     if (snapshot.header.part_count > 0) {
       ++d.world_datagrams;
       d.world_entries += static_cast<int>(snapshot.entries.size());
@@ -126,13 +127,14 @@ TEST(PostureForwarding, SnapshotsAcknowledgeTheUplinkAndAskForAKeyframeAfterALos
     std::vector<std::uint8_t> record, out;
     EXPECT_TRUE(encoder.encode(test::syntheticPosture(t), static_cast<std::uint16_t>(sequence), t,
                                false, record));
-    wire::writePostureDatagram({memberId(0), 500u}, record, out);
-    return out;
+    wire::writePostureDatagram({memberId(0), 0}, record, out);
+    return test::sealAs(memberId(0), out);
   };
   const auto headerTo = [&](int member) {
     wire::Snapshot snapshot;
     for (const OutDatagram& out : fx.datagrams) {
-      if (out.to == endpointOf(member) && wire::readSnapshot(out.bytes, snapshot)) {
+      if (out.to == endpointOf(member) &&
+          wire::readSnapshot(test::openFor(memberId(member), out.bytes), snapshot)) {
         return snapshot.header;
       }
     }

@@ -13,6 +13,7 @@
 #include "tests/net/sim_network.hpp"
 #include "tests/net/synthetic_avatar.hpp"
 #include "tests/server/control_frames.hpp"
+#include "tests/server/sealed_datagrams.hpp"
 
 namespace vistel::server {
 namespace {
@@ -175,6 +176,7 @@ TEST_F(ServerCoreTest, InvalidUploadsAreRejected) {
   join.mutable_join()->set_name("mallory");
   join.mutable_join()->set_avatar_hash(std::string(64, 'a'));
   join.mutable_join()->set_avatar_size(100);
+  join.mutable_join()->set_udp_public_key(test::kTestUdpPublicKey);
   net_.injectConnect(901);
   net_.injectStream(901, frameOf(join));
   control::ClientMessage chunk;
@@ -212,45 +214,77 @@ TEST_F(ServerCoreTest, InvalidUploadsAreRejected) {
   EXPECT_EQ(replies[0].error().code(), control::ErrorReply::AVATAR_REJECTED);
 }
 
-TEST_F(ServerCoreTest, WrongKeyUdpSenderIsIgnoredAndOthersUnaffected) {
+// Issue 20, finding 4: datagrams are sealed with per-member keys from the handshake. A
+// sniffer sees member ids and counters, never a key: its forged hellos and postures (a
+// guessed key, the observed counters, sequence +32767 and a far root) are dropped, its
+// replays of what it captured too, and the member's real stream goes on.
+TEST_F(ServerCoreTest, ForgedAndReplayedDatagramsAreDroppedAndTheMemberKeepsMoving) {
   const auto a = join("alice", avatar_a_);
   const auto b = join("bob", avatar_b_);
-  net_.advance(0.3);
+  net_.sniff(true);
+  stream({a, b}, 0.5);
+  net_.sniff(false);
   ASSERT_EQ(net_.session(a).state(), SessionState::kLive);
   const std::uint32_t alice = net_.session(a).memberId();
   const wire::Endpoint attacker = wire::Endpoint::ipv4(0xC0A80001u, 6666);
+  std::vector<std::vector<std::uint8_t>> captured;
+  std::uint64_t newest_counter = 0;
+  for (const auto& d : net_.sniffed()) {
+    if (d.client != a) continue;
+    captured.push_back(d.bytes);
+    newest_counter = std::max(newest_counter, wire::peekCounter(d.bytes, wire::kClientHeaderBytes));
+  }
+  ASSERT_GE(captured.size(), 10u);
+  // What travels in clear: the id and the counter, nothing that opens or forges.
+  EXPECT_EQ(wire::peekMemberId(captured[0]), alice);
 
-  // A hello with alice's id and a guessed key, from elsewhere: no answer at all.
+  wire::AeadKey guessed{};
+  guessed.fill(0x5A);
+  // A hello with alice's id, sealed with a guessed key, from elsewhere: no answer at all.
   wire::HelloPacket hello;
-  hello.header = {alice, 0x1234};
+  hello.header = {alice, 0};
   std::vector<std::uint8_t> bytes;
   wire::write(hello, bytes);
-  net_.injectDatagram(bytes, attacker);
-  // Postures claiming to be alice: with a wrong key, and from the wrong endpoint.
+  net_.injectDatagram(test::sealWith(guessed, bytes, newest_counter + 1), attacker);
+  // Postures claiming to be alice, from her endpoint and elsewhere: the next counters she
+  // will use, sequence 32767 (ahead of hers by ~32750), a root far away.
   wire::PosturePacket forged;
-  forged.header = {alice, 0x1234};
+  forged.header = {alice, 0};
   Posture p = test::syntheticPosture(0.0);
   p.root_translation = {9.0f, 9.0f, 9.0f};
-  ASSERT_TRUE(wire::encodePostureRecord(p, 60000, 0.0, forged.record));
-  std::vector<std::uint8_t> forged_bytes;
-  wire::write(forged, forged_bytes);
+  ASSERT_TRUE(wire::encodePostureRecord(p, 32767, net_.now(), forged.record));
+  std::vector<std::uint8_t> forged_plain;
+  wire::write(forged, forged_plain);
   for (int k = 0; k < 20; ++k) {
+    const auto forged_bytes = test::sealWith(guessed, forged_plain, newest_counter + 1 + k);
     net_.injectDatagram(forged_bytes, net_.client(a).endpoint, 0.01 * k);
     net_.injectDatagram(forged_bytes, attacker, 0.01 * k);
   }
+  // Every datagram alice sent, replayed from her own endpoint.
+  for (const auto& d : captured) net_.injectDatagram(d, net_.client(a).endpoint, 0.005);
+  const auto before = received(b, "alice");
   stream({a, b}, 1.0);
 
   EXPECT_TRUE(net_.rawDatagrams(attacker).empty());
-  EXPECT_GE(net_.server().lobby().drops().count("hello with bad key"), 1u);
+  EXPECT_GE(net_.server().lobby().drops().count("hello with bad tag"), 1u);
   const Room* room = net_.server().findRoom("lab");
   ASSERT_NE(room, nullptr);
-  EXPECT_GE(room->drops().count("bad key"), 40u);
-  // Bob still sees alice's real stream, never the forged root.
-  EXPECT_GE(received(b, "alice"), 25u);
+  EXPECT_GE(room->drops().count("bad datagram tag"), 20u);  // from alice's endpoint
+  EXPECT_GE(room->drops().count("wrong endpoint"), 20u);    // from elsewhere
+  // The replays: the room's window drops the postures and pings it has seen (the oldest
+  // as too old), the lobby's the hellos.
+  const std::uint64_t replays_dropped = room->drops().count("replayed datagram") +
+                                        room->drops().count("datagram too old") +
+                                        net_.server().lobby().drops().count("replayed datagram") +
+                                        net_.server().lobby().drops().count("datagram too old");
+  EXPECT_EQ(replays_dropped, captured.size());
+  // Bob goes on seeing alice's real stream, never the forged root.
+  EXPECT_GE(received(b, "alice"), before + 25u);
   const auto* seen = net_.session(b).findMember(alice);
   Posture latest;
   ASSERT_TRUE(seen->buffer.sample(1e9, latest));
   EXPECT_LT(latest.root_translation.x, 1.0f);
+  EXPECT_EQ(net_.session(a).state(), SessionState::kLive);
 }
 
 TEST_F(ServerCoreTest, UnauthenticatedDatagramsNeverGetMoreBytesBack) {
@@ -270,7 +304,7 @@ TEST_F(ServerCoreTest, UnauthenticatedDatagramsNeverGetMoreBytesBack) {
   ping.header = {net_.session(a).memberId() + 1, 1};
   std::vector<std::uint8_t> ping_bytes;
   wire::write(ping, ping_bytes);
-  net_.injectDatagram(ping_bytes, stranger);
+  net_.injectDatagram(test::sealWith(wire::AeadKey{}, ping_bytes), stranger);
   net_.advance(0.2);
   EXPECT_TRUE(net_.rawDatagrams(stranger).empty());
   EXPECT_EQ(net_.session(a).state(), SessionState::kLive);
@@ -302,6 +336,7 @@ TEST_F(ServerCoreTest, GarbageAndOversizedTcpFramesDropOnlyTheirSender) {
   join_msg.mutable_join()->set_name("eve");
   join_msg.mutable_join()->set_avatar_hash(avatar_a_.hash);
   join_msg.mutable_join()->set_avatar_size(avatar_a_.bytes.size());
+  join_msg.mutable_join()->set_udp_public_key(test::kTestUdpPublicKey);
   net_.injectConnect(912);
   net_.injectStream(912, frameOf(join_msg));
   EXPECT_EQ(net_.server().lobby().memberCount(), 3);
@@ -340,7 +375,6 @@ TEST_F(ServerCoreTest, LeavingEmptiesAndClosesTheRoomAndStaleIdsAreRefused) {
   const auto a = join("alice", avatar_a_);
   net_.advance(0.3);
   const std::uint32_t old_id = net_.session(a).memberId();
-  const std::uint64_t old_key = 0;  // unknown to the test; the id alone is stale
   net_.session(a).leave("bye");
   net_.advance(0.1);
   EXPECT_EQ(net_.server().lobby().memberCount(), 0);
@@ -353,9 +387,10 @@ TEST_F(ServerCoreTest, LeavingEmptiesAndClosesTheRoomAndStaleIdsAreRefused) {
   EXPECT_NE(net_.session(b).memberId(), old_id);
   EXPECT_EQ(net_.session(b).memberId() & 0xFFFFu, old_id & 0xFFFFu);
   wire::HelloPacket hello;
-  hello.header = {old_id, old_key};
+  hello.header = {old_id, 0};
   std::vector<std::uint8_t> bytes;
   wire::write(hello, bytes);
+  bytes = test::sealWith(wire::AeadKey{}, bytes);  // the key does not matter: the id is stale
   net_.injectDatagram(bytes, wire::Endpoint::ipv4(0xC0A80003u, 1));
   net_.advance(0.01);
   EXPECT_GE(net_.server().lobby().drops().count("hello for unknown member"), 1u);
@@ -423,14 +458,16 @@ TEST(HelloChallenge, AForgedSourceAddressGetsOneSmallChallengeAndNoStream) {
   net.connect(bob);
   net.advance(0.3);
   ASSERT_EQ(net.session(alice).state(), SessionState::kLive);
-  // Alice knows her own id and key; she sends a hello as if from the victim.
+  // Alice knows her own id and keys; she seals a hello as if from the victim.
   const wire::Endpoint victim = wire::Endpoint::ipv4(0x7F000042u, 5555);
+  const wire::SessionKeys* keys = net.server().lobby().keysOf(net.session(alice).memberId());
+  ASSERT_NE(keys, nullptr);
   wire::HelloPacket hello;
   hello.header = {net.session(alice).memberId(), 0};
-  hello.header.key = net.server().lobby().keyOf(net.session(alice).memberId());
   hello.attempt = 1;
   std::vector<std::uint8_t> bytes;
   wire::write(hello, bytes);
+  bytes = test::sealWith(keys->client_to_server, bytes, std::uint64_t{1} << 40);
   net.injectDatagram(bytes, victim);
   double next = net.now();
   net.advance(1.0, 0.001, [&](double now) {
@@ -442,9 +479,9 @@ TEST(HelloChallenge, AForgedSourceAddressGetsOneSmallChallengeAndNoStream) {
   });
   const auto& to_victim = net.rawDatagrams(victim);
   ASSERT_EQ(to_victim.size(), 1u);
-  EXPECT_LT(to_victim[0].size(), bytes.size());
+  EXPECT_LE(to_victim[0].size(), bytes.size());
   wire::HelloAckPacket challenge;
-  ASSERT_TRUE(wire::read(to_victim[0], challenge));
+  ASSERT_TRUE(wire::read(test::openWith(keys->server_hello, to_victim[0]), challenge));
   EXPECT_NE(challenge.cookie, 0u);
   // Alice's own stream goes on where she really is.
   EXPECT_EQ(net.session(alice).state(), SessionState::kLive);

@@ -11,6 +11,7 @@
 #include "server/core/room.hpp"
 #include "tests/net/synthetic_avatar.hpp"
 #include "tests/server/control_frames.hpp"
+#include "tests/server/sealed_datagrams.hpp"
 
 namespace vistel::server {
 namespace {
@@ -21,12 +22,12 @@ wire::Endpoint endpointOf(int i) {
 
 std::vector<std::uint8_t> pingFrom(int i) {
   wire::PingPacket ping;
-  ping.header = {0x00010000u + static_cast<std::uint32_t>(i), 900u + static_cast<std::uint64_t>(i)};
+  ping.header = {0x00010000u + static_cast<std::uint32_t>(i), 0};
   ping.ping_id = 1;
   ping.client_time = 1.0;
   std::vector<std::uint8_t> out;
   wire::write(ping, out);
-  return out;
+  return test::sealAs(ping.header.member_id, std::move(out));
 }
 
 TEST(ServerPause, MembersAreNotDroppedForAPauseOfTheServer) {
@@ -39,7 +40,7 @@ TEST(ServerPause, MembersAreNotDroppedForAPauseOfTheServer) {
     c.kind = RoomCommand::Kind::kAddMember;
     c.room = RoomId{1};
     c.member = MemberId{0x00010000u + static_cast<std::uint32_t>(i)};
-    c.key = 900u + static_cast<std::uint64_t>(i);
+    test::setTestKeys(c);
     c.joint_count = 5;
     room.apply(c, 0.0);
     c.kind = RoomCommand::Kind::kBindEndpoint;

@@ -49,6 +49,11 @@ TEST(DatagramDrops, ReasonsFallIntoTheirClasses) {
   EXPECT_EQ(classifyDropReason("posture rate exceeded"), DropClass::kRate);
   EXPECT_EQ(classifyDropReason("malformed posture"), DropClass::kBadPayload);
   EXPECT_EQ(classifyDropReason("something new"), DropClass::kOther);
+  EXPECT_EQ(classifyDropReason("bad datagram tag"), DropClass::kUnknownKey);
+  EXPECT_EQ(classifyDropReason("replayed datagram"), DropClass::kReplay);
+  EXPECT_EQ(classifyDropReason("datagram too old"), DropClass::kReplay);
+  EXPECT_EQ(classifyDropReason("capture time too old"), DropClass::kBadPayload);
+  EXPECT_EQ(dropClassName(DropClass::kReplay), "replay");
 }
 
 TEST(DatagramDrops, CountsByClassAndSummarisesOncePerInterval) {

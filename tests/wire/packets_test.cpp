@@ -42,10 +42,10 @@ void expectPrefixesRejected(const std::vector<std::uint8_t>& bytes) {
 TEST(Packets, HelloLayoutMatchesWireMd) {
   HelloPacket h;
   h.header.member_id = 0x00010002u;
-  h.header.key = 0x1122334455667788ull;
+  h.header.counter = 0x1122334455667788ull;
   h.attempt = 3;
   h.cookie = 0x0102030405060708ull;
-  const std::vector<std::uint8_t> expected = {0x03, 0x01, 0x02, 0x00, 0x01, 0x00, 0x88, 0x77, 0x66,
+  const std::vector<std::uint8_t> expected = {0x04, 0x01, 0x02, 0x00, 0x01, 0x00, 0x88, 0x77, 0x66,
                                               0x55, 0x44, 0x33, 0x22, 0x11, 0x03, 0x00, 0x00, 0x00,
                                               0x08, 0x07, 0x06, 0x05, 0x04, 0x03, 0x02, 0x01};
   EXPECT_EQ(bytesOf(h), expected);
@@ -78,7 +78,7 @@ TEST(Packets, RoundTripsAndPrefixes) {
   ASSERT_TRUE(read(posture_bytes, back));
   EXPECT_EQ(back.record.rotations, posture.record.rotations);
   EXPECT_EQ(back.record.root_mm, posture.record.root_mm);
-  EXPECT_EQ(back.header.key, 42u);
+  EXPECT_EQ(back.header.counter, 42u);
 
   PingPacket ping;
   ping.header = {7, 8};
@@ -89,15 +89,21 @@ TEST(Packets, RoundTripsAndPrefixes) {
   HelloAckPacket ack{7, 9, 11};
   expectPrefixesRejected<HelloAckPacket>(bytesOf(ack));
 
-  PongPacket pong{5, 12.5, 99.25};
+  PongPacket pong{5, 99.25};
   expectPrefixesRejected<PongPacket>(bytesOf(pong));
   PongPacket pong_back;
   ASSERT_TRUE(read(bytesOf(pong), pong_back));
   EXPECT_EQ(pong_back.server_time, 99.25);
 
-  // A server must answer a hello with fewer bytes than it carried.
-  EXPECT_LT(measure(ack), measure(hello));
+  // A server must answer a hello with no more bytes than it carried, a ping with fewer
+  // (sealing adds the same 16 bytes to both).
+  EXPECT_LE(measure(ack), measure(hello));
   EXPECT_LT(measure(pong), measure(ping));
+  // The server -> client clear header carries the counter after version and type.
+  EXPECT_EQ(bytesOf(ack).size(), kServerHeaderBytes + 16);
+  EXPECT_EQ(clearHeaderBytes(PacketType::kHelloAck), kServerHeaderBytes);
+  EXPECT_EQ(clearHeaderBytes(PacketType::kSnapshot), kServerHeaderBytes);
+  EXPECT_EQ(clearHeaderBytes(PacketType::kPosture), kClientHeaderBytes);
 }
 
 TEST(Packets, WrongVersionOrTypeIsRejected) {
@@ -115,7 +121,7 @@ TEST(Packets, WrongVersionOrTypeIsRejected) {
 }
 
 TEST(Packets, NonFiniteTimesAreRejected) {
-  PongPacket pong{1, std::numeric_limits<double>::quiet_NaN(), 1.0};
+  PongPacket pong{1, std::numeric_limits<double>::quiet_NaN()};
   PongPacket out;
   EXPECT_FALSE(read(bytesOf(pong), out));
   PingPacket ping;
@@ -167,9 +173,9 @@ TEST(Packets, EverySnapshotPrefixIsRejected) {
   EXPECT_FALSE(readSnapshot(longer, snap));
   // A count larger than the entries present, and one the datagram cannot possibly hold.
   auto lying = packet;
-  lying[14] = 3;
+  lying[22] = 3;
   EXPECT_FALSE(readSnapshot(lying, snap));
-  lying[14] = 255;
+  lying[22] = 255;
   EXPECT_FALSE(readSnapshot(lying, snap));
 }
 

@@ -23,6 +23,7 @@ InteractionSection sampleSection() {
 
 Snapshot sampleSnapshot() {
   Snapshot s;
+  s.header.counter = 9;
   s.header.tick = 5;
   s.header.server_time = 2.0;
   s.header.part = 0;
@@ -43,7 +44,8 @@ std::vector<std::uint8_t> bytesOf(const Snapshot& s) {
 // The example of proto/WIRE.md §3.8, byte for byte.
 TEST(WorldState, SnapshotLayoutMatchesWireMd) {
   const std::vector<std::uint8_t> expected = {
-      0x03, 0x82,                                      // version 3, snapshot
+      0x04, 0x82,                                      // version 4, snapshot
+      0x09, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,  // counter 9 (set by sealing)
       0x05, 0x00, 0x00, 0x00,                          // tick 5
       0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x40,  // 2.0 s
       0x00, 0x01, 0x00, 0x01,                          // 0 entries, 1 prop, part 0 of 1
@@ -153,10 +155,10 @@ TEST(WorldState, MalformedSectionsAreRejected) {
   EXPECT_FALSE(readSnapshot(bad, out));
   // Part index past the part count; more parts than allowed; a part index without parts.
   bad = good;
-  bad[16] = 1;
+  bad[24] = 1;
   EXPECT_FALSE(readSnapshot(bad, out));
   bad = good;
-  bad[17] = kMaxInteractionParts + 1;
+  bad[25] = kMaxInteractionParts + 1;
   EXPECT_FALSE(readSnapshot(bad, out));
   // Pairs without bodies.
   InteractionSection x;
@@ -167,7 +169,7 @@ TEST(WorldState, MalformedSectionsAreRejected) {
   EXPECT_FALSE(readSnapshot(bytesOf(s), out));
   // A prop count the bytes cannot hold.
   bad = good;
-  bad[15] = 200;
+  bad[23] = 200;
   EXPECT_FALSE(readSnapshot(bad, out));
 }
 
@@ -229,11 +231,11 @@ TEST(WorldState, RandomSectionsRoundTripAndGarbageIsSafe) {
 
 // The bytes report (proto/WIRE.md §3.8): what the collision world adds to a tick.
 TEST(WorldState, BytesPerTickReport) {
-  EXPECT_EQ(kSnapshotHeaderBytes, 21u);
+  EXPECT_EQ(kSnapshotHeaderBytes, 29u);
   EXPECT_EQ(kPropStateBytes, 16);
   std::printf(
-      "[ measure  ] snapshot header 21 B; prop state 16 B; section 5 B + 4 B/body + "
-      "pairs\n");
+      "[ measure  ] snapshot header 29 B (+16 B tag sealed); prop state 16 B; section 5 B + "
+      "4 B/body + pairs\n");
   struct Case {
     int bodies;
     std::size_t pairs;
@@ -245,8 +247,8 @@ TEST(WorldState, BytesPerTickReport) {
     std::printf(
         "[ measure  ] %2d bodies, %3zu pairs: %2d bits/pair, section %4zu B, %zu datagram(s)\n",
         c.bodies, c.pairs, bits, bytes,
-        (bytes + kMaxDatagramBytes - kSnapshotHeaderBytes - 1) /
-            (kMaxDatagramBytes - kSnapshotHeaderBytes));
+        (bytes + kMaxPlainDatagramBytes - kSnapshotHeaderBytes - 1) /
+            (kMaxPlainDatagramBytes - kSnapshotHeaderBytes));
     Snapshot s;
     s.header.part_count = 1;
     for (int b = 0; b < c.bodies; ++b) s.interactions.member_ids.push_back(b);
