@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "common/math/transform.hpp"
+#include "common/motion/auto_joint_map.hpp"
 #include "common/motion/joint_map.hpp"
 
 namespace vistel::net {
@@ -60,13 +61,13 @@ Result<std::unique_ptr<ClipPlayer>> ClipPlayer::create(MotionClip clip, const Sk
   // Otherwise retarget through the joint maps.
   auto maps = loadJointMaps(config_dir);
   if (!maps) return withContext(p->clip_.source, maps.error());
-  auto source_map = selectJointMap(*maps, cs);
+  auto source_map = chooseJointMap(*maps, cs);  // a config map, else one inferred
   if (!source_map) return withContext(p->clip_.source + " (clip skeleton)", source_map.error());
-  auto target_map = selectJointMap(*maps, as);
+  auto target_map = chooseJointMap(*maps, as);
   if (!target_map) return withContext(p->clip_.source + " (avatar skeleton)", target_map.error());
   // forClip: against the clip's natural pose (its zero pose may not be one: the gesture
   // clips' lays the bones along the axes and twists a leg half a turn).
-  auto retargeter = Retargeter::forClip(p->clip_, **source_map, as, **target_map);
+  auto retargeter = Retargeter::forClip(p->clip_, source_map->map, as, target_map->map);
   if (!retargeter) return withContext(p->clip_.source, retargeter.error());
   p->retargeter_.emplace(std::move(*retargeter));
   return p;

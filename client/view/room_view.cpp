@@ -22,6 +22,7 @@
 #include "client/view/worker_pool.hpp"
 #include "common/anim/skinning.hpp"
 #include "common/anim/skinning_rig.hpp"
+#include "common/motion/auto_joint_map.hpp"
 #include "common/motion/joint_map.hpp"
 
 namespace vistel {
@@ -190,9 +191,9 @@ int RoomView::Impl::headFromJointMaps(const Skeleton& skeleton) {
       warning = "joint maps: " + maps.error().message;
     }
   }
-  auto map = selectJointMap(joint_maps, skeleton);
+  auto map = chooseJointMap(joint_maps, skeleton);  // a config map, else one inferred
   if (!map) return -1;
-  const std::string_view name = (*map)->jointFor("head");
+  const std::string_view name = map->map.jointFor("head");
   return name.empty() ? -1 : skeleton.find(name);
 }
 

@@ -2,18 +2,20 @@
 
 #include <cmath>
 
+#include "common/motion/auto_joint_map.hpp"
+
 namespace vistel {
 
 Result<ClipBody> makeClipBody(MotionClip clip, std::span<const JointMap> maps) {
   ClipBody body;
   body.skeleton = clipSkeleton(clip);
-  Result<const JointMap*> map = selectJointMap(maps, body.skeleton);
+  Result<JointMapChoice> map = chooseJointMap(maps, body.skeleton);  // config map, else inferred
   if (!map)
     return withContext(fmt::format("{}: no joint map fits the clip", clip.source), map.error());
-  Result<JointRoles> roles = resolveJointRoles(body.skeleton, *map);
+  Result<JointRoles> roles = resolveJointRoles(body.skeleton, &map->map);
   if (!roles) return withContext(clip.source, roles.error());
   body.roles = *roles;
-  body.map_name = (*map)->name;
+  body.map_name = map->map.name;
   body.clip = std::move(clip);
   return body;
 }

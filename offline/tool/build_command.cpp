@@ -21,6 +21,7 @@
 
 #include "common/avatar/avatar_io.hpp"
 #include "common/base/file.hpp"
+#include "common/motion/auto_joint_map.hpp"
 #include "common/motion/joint_map.hpp"
 #include "offline/build/build_model.hpp"
 #include "offline/tool/tool_commands.hpp"
@@ -171,9 +172,11 @@ Status buildAvatarImplicit(AvatarModel& avatar, const std::string& primitives,
   // The joint map (the avatar's names -> canonical ones) and the primitive map.
   Result<std::vector<JointMap>> maps = loadJointMaps(config);
   if (!maps) return maps.error();
-  Result<const JointMap*> map = selectJointMap(*maps, avatar.skeleton);
+  // A config/skeletons map that fits, else one inferred from names and topology.
+  Result<JointMapChoice> map = chooseJointMap(*maps, avatar.skeleton);
   if (!map) {
-    return withContext(fmt::format("avatar '{}': no joint map in {}/skeletons fits its skeleton",
+    return withContext(fmt::format("avatar '{}': no joint map in {}/skeletons fits its skeleton "
+                                   "and none can be inferred",
                                    avatar.name, config),
                        map.error());
   }
@@ -181,7 +184,7 @@ Status buildAvatarImplicit(AvatarModel& avatar, const std::string& primitives,
   if (!spec) return spec.error();
   BuildOptions options;
   options.progress = std::move(progress);
-  Result<ImplicitModel> model = buildImplicitModel(avatar, *spec, *map, options, report);
+  Result<ImplicitModel> model = buildImplicitModel(avatar, *spec, &map->map, options, report);
   if (!model)
     return withContext(fmt::format("fitting {} to '{}'", primitives, avatar.name), model.error());
   avatar.implicit = std::move(*model);

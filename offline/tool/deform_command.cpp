@@ -28,6 +28,7 @@
 
 #include "common/base/file.hpp"
 #include "common/deform/prop.hpp"
+#include "common/motion/auto_joint_map.hpp"
 #include "common/motion/bvh.hpp"
 #include "common/motion/joint_map.hpp"
 #include "common/motion/retarget.hpp"
@@ -224,21 +225,22 @@ Status runDeform(const DeformCommandOptions& opt) {
   Result<std::vector<JointMap>> maps = loadJointMaps(opt.config);
   if (!maps) return maps.error();
   int hips = 0;
-  if (Result<const JointMap*> map = selectJointMap(*maps, avatar->skeleton); map) {
-    hips = std::max(0, avatar->skeleton.find((*map)->jointFor("hips")));
+  if (Result<JointMapChoice> map = chooseJointMap(*maps, avatar->skeleton); map) {
+    hips = std::max(0, avatar->skeleton.find(map->map.jointFor("hips")));
   }
   if (clip) {
     const Skeleton clip_skeleton = clipSkeleton(*clip);
-    Result<const JointMap*> clip_map = selectJointMap(*maps, clip_skeleton);
+    Result<JointMapChoice> clip_map = chooseJointMap(*maps, clip_skeleton);
     if (!clip_map) {
       return withContext(fmt::format("{}: no joint map fits the clip", opt.bvh), clip_map.error());
     }
-    Result<const JointMap*> avatar_map = selectJointMap(*maps, avatar->skeleton);
+    Result<JointMapChoice> avatar_map = chooseJointMap(*maps, avatar->skeleton);
     if (!avatar_map) {
       return withContext(fmt::format("{}: no joint map fits the avatar", opt.avatar),
                          avatar_map.error());
     }
-    Result<Retargeter> r = Retargeter::forClip(*clip, **clip_map, avatar->skeleton, **avatar_map);
+    Result<Retargeter> r =
+        Retargeter::forClip(*clip, clip_map->map, avatar->skeleton, avatar_map->map);
     if (!r) return withContext("retargeting", r.error());
     retargeter = std::move(*r);
   }

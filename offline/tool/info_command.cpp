@@ -1,4 +1,5 @@
-// vistel-avatar info FILE [--json]: counts, joints, influences and bounds of an avatar.
+// vistel-avatar info FILE [--json] [--config DIR]: counts, joints, influences and bounds of an
+// avatar, and the joint map chosen for it (a config/skeletons map, or an inferred one).
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -6,6 +7,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "common/motion/auto_joint_map.hpp"
 #include "offline/tool/tool_commands.hpp"
 
 namespace vistel {
@@ -14,7 +16,15 @@ namespace {
 struct InfoOptions {
   std::string file;
   bool json = false;
+  std::string config = "config";
 };
+
+// The joint map chosen for the skeleton, or why none is.
+Result<JointMapChoice> chosenMap(const Skeleton& skeleton, const std::string& config) {
+  Result<std::vector<JointMap>> maps = loadJointMaps(config);
+  if (!maps) return maps.error();
+  return chooseJointMap(*maps, skeleton);
+}
 
 Status runInfo(const InfoOptions& opt) {
   std::vector<std::string> warnings;
@@ -25,6 +35,7 @@ Status runInfo(const InfoOptions& opt) {
   const SkinMesh& skin = avatar.skin;
   const Bounds box = computeBounds(skin.positions);
   const glm::vec3 size = box.max - box.min;
+  const Result<JointMapChoice> map = chosenMap(skel, opt.config);
 
   // One JSON object on stdout.
   if (opt.json) {
@@ -40,6 +51,18 @@ Status runInfo(const InfoOptions& opt) {
                           {"bbox_max", {box.max.x, box.max.y, box.max.z}},
                           {"size", {size.x, size.y, size.z}},
                           {"warnings", warnings}};
+    if (map) {
+      nlohmann::json joints = nlohmann::json::object();
+      for (std::size_t i = 0; i < map->map.canonical.size(); ++i) {
+        joints[map->map.canonical[i]] = {{"joint", map->map.joint[i]}, {"from", map->origin[i]}};
+      }
+      out["joint_map"] = {{"name", map->map.name},
+                          {"inferred", map->inferred},
+                          {"joints", joints},
+                          {"notes", map->notes}};
+    } else {
+      out["joint_map"] = {{"error", map.error().message}};
+    }
     std::cout << out.dump() << std::endl;
     return {};
   }
@@ -61,6 +84,13 @@ Status runInfo(const InfoOptions& opt) {
     fmt::print("  {:3} {} <- {}\n", j, skel.names[static_cast<std::size_t>(j)],
                p == kNoParent ? std::string("(root)") : skel.names[static_cast<std::size_t>(p)]);
   }
+  // The mapping to canonical joints (a non-humanoid still gets the rest of the report).
+  if (map) {
+    fmt::print("joint map ({} canonical joints; canonical <- joint [from]):\n{}",
+               map->map.canonical.size(), describeJointMapChoice(*map));
+  } else {
+    fmt::print("joint map: none: {}\n", map.error().message);
+  }
   if (!warnings.empty()) {
     fmt::print("warnings:\n");
     for (const std::string& w : warnings) fmt::print("  {}\n", w);
@@ -76,9 +106,13 @@ void registerInfoCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "info",
       "Print vertices, triangles, joints (names, parents), maximum influences per vertex "
-      "and the bounding box (metres) of an avatar (.glb, .gltf or .vavatar)");
+      "the bounding box (metres) of an avatar (.glb, .gltf or .vavatar), and the joint map chosen "
+      "for it (per canonical joint: the avatar's joint and where the match came from)");
   cmd->add_option("file", opt->file, "avatar file (.glb, .gltf or .vavatar)")->required();
   cmd->add_flag("--json", opt->json, "print one JSON object instead of text");
+  cmd->add_option("--config", opt->config,
+                  "config folder whose skeletons/*.toml joint maps take precedence over the "
+                  "inferred map (default: config, else the built-in copies)");
   setCommandAction(cmd, [opt]() { return runInfo(*opt); });
 }
 

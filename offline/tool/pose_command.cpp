@@ -10,6 +10,7 @@
 #include "common/anim/posture.hpp"
 #include "common/anim/skinning.hpp"
 #include "common/anim/skinning_rig.hpp"
+#include "common/motion/auto_joint_map.hpp"
 #include "common/motion/bvh.hpp"
 #include "common/motion/joint_map.hpp"
 #include "common/motion/retarget.hpp"
@@ -43,15 +44,16 @@ Result<Posture> clipPosture(const PoseOptions& opt, const Skeleton& target) {
 
   Result<std::vector<JointMap>> maps = loadJointMaps(opt.config);
   if (!maps) return maps.error();
-  Result<const JointMap*> source_map = selectJointMap(*maps, source);
+  Result<JointMapChoice> source_map = chooseJointMap(*maps, source);
   if (!source_map)
     return withContext(fmt::format("{}: no joint map fits the clip", opt.bvh), source_map.error());
-  Result<const JointMap*> target_map = selectJointMap(*maps, target);
+  Result<JointMapChoice> target_map = chooseJointMap(*maps, target);
   if (!target_map) {
     return withContext(fmt::format("{}: no joint map fits the avatar", opt.file),
                        target_map.error());
   }
-  Result<Retargeter> retargeter = Retargeter::forClip(*clip, **source_map, target, **target_map);
+  Result<Retargeter> retargeter =
+      Retargeter::forClip(*clip, source_map->map, target, target_map->map);
   if (!retargeter) return withContext("retargeting", retargeter.error());
   Posture out;
   retargeter->apply(source_posture, out);
@@ -84,8 +86,8 @@ Status runPose(const PoseOptions& opt) {
   int head = -1;
   if (method == SkinningMethod::kSpineFfd) {
     if (Result<std::vector<JointMap>> maps = loadJointMaps(opt.config); maps) {
-      if (Result<const JointMap*> map = selectJointMap(*maps, skel); map) {
-        head = skel.find((*map)->jointFor("head"));
+      if (Result<JointMapChoice> map = chooseJointMap(*maps, skel); map) {
+        head = skel.find(map->map.jointFor("head"));
       }
     }
   }

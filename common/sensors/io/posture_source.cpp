@@ -4,6 +4,7 @@
 #include <chrono>
 #include <thread>
 
+#include "common/motion/auto_joint_map.hpp"
 #include "common/motion/bvh.hpp"
 #include "common/motion/joint_map.hpp"
 #include "common/motion/retarget.hpp"
@@ -234,12 +235,12 @@ class SolvingSource final : public PostureSource {
 // pose as the avatar would hold it.
 Result<Posture> clipPoseOnAvatar(const ClipBody& clip, const Skeleton& avatar,
                                  std::span<const JointMap> maps) {
-  Result<const JointMap*> clip_map = selectJointMap(maps, clip.skeleton);
+  Result<JointMapChoice> clip_map = chooseJointMap(maps, clip.skeleton);
   if (!clip_map) return clip_map.error();
-  Result<const JointMap*> avatar_map = selectJointMap(maps, avatar);
+  Result<JointMapChoice> avatar_map = chooseJointMap(maps, avatar);
   if (!avatar_map) return avatar_map.error();
   Result<Retargeter> retargeter =
-      Retargeter::create(clip.skeleton, **clip_map, avatar, **avatar_map);
+      Retargeter::create(clip.skeleton, clip_map->map, avatar, avatar_map->map);
   if (!retargeter) return retargeter.error();
   Posture first;
   samplePosture(clip.clip, 0, first);
@@ -325,9 +326,9 @@ Result<std::unique_ptr<PostureSource>> openPostureSource(const std::string& spec
   if (!maps) return maps.error();
   Result<JointRoles> roles = resolveJointRoles(avatar, nullptr);
   if (!roles) {
-    Result<const JointMap*> map = selectJointMap(*maps, avatar);
+    Result<JointMapChoice> map = chooseJointMap(*maps, avatar);
     if (!map) return withContext("the avatar's skeleton", map.error());
-    roles = resolveJointRoles(avatar, *map);
+    roles = resolveJointRoles(avatar, &map->map);
     if (!roles) return withContext("the avatar's skeleton", roles.error());
   }
 
