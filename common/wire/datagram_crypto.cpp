@@ -64,17 +64,21 @@ void appendU32(std::vector<std::uint8_t>& out, std::uint32_t v) {
 
 // ---------------------------------------------------------------- key exchange
 
-Result<KeyExchange> KeyExchange::generate() {
-  EVP_PKEY* key = EVP_PKEY_Q_keygen(nullptr, nullptr, "X25519");
-  if (key == nullptr) return fail("X25519 key generation failed");
+Result<KeyExchange> KeyExchange::adopt(void* key) {
   KeyExchange k;
-  k.key_ = key;
+  k.key_ = key;  // owned from here (freed with k on failure too)
   std::size_t length = k.public_.size();
-  if (EVP_PKEY_get_raw_public_key(key, k.public_.data(), &length) != 1 ||
+  if (EVP_PKEY_get_raw_public_key(static_cast<EVP_PKEY*>(key), k.public_.data(), &length) != 1 ||
       length != k.public_.size()) {
     return fail("X25519 public key unavailable");
   }
   return k;
+}
+
+Result<KeyExchange> KeyExchange::generate() {
+  EVP_PKEY* key = EVP_PKEY_Q_keygen(nullptr, nullptr, "X25519");
+  if (key == nullptr) return fail("X25519 key generation failed");
+  return adopt(key);
 }
 
 Result<KeyExchange> KeyExchange::fromPrivateKey(std::span<const std::uint8_t> private_key) {
@@ -85,14 +89,7 @@ Result<KeyExchange> KeyExchange::fromPrivateKey(std::span<const std::uint8_t> pr
   EVP_PKEY* key = EVP_PKEY_new_raw_private_key(EVP_PKEY_X25519, nullptr, private_key.data(),
                                                private_key.size());
   if (key == nullptr) return fail("X25519 private key rejected");
-  KeyExchange k;
-  k.key_ = key;
-  std::size_t length = k.public_.size();
-  if (EVP_PKEY_get_raw_public_key(key, k.public_.data(), &length) != 1 ||
-      length != k.public_.size()) {
-    return fail("X25519 public key unavailable");
-  }
-  return k;
+  return adopt(key);
 }
 
 KeyExchange::KeyExchange(KeyExchange&& other) noexcept : key_(other.key_), public_(other.public_) {

@@ -70,6 +70,8 @@ class KeyExchange {
 
  private:
   KeyExchange() = default;
+  // Takes ownership of `key` (an EVP_PKEY*) and reads its public key.
+  static Result<KeyExchange> adopt(void* key);
   void* key_ = nullptr;  // EVP_PKEY*
   PublicKey public_{};
 };
