@@ -455,24 +455,30 @@ Assignment inferTopology(Rig& rig) {
   }
   legs.resize(std::min<std::size_t>(legs.size(), 2));
 
-  // Toes: a last bone that runs across the up axis; its direction gives forward.
-  const auto horizontal = [&](int from, int to) {
-    return std::abs(glm::dot(safeNormalize(rig.at(to) - rig.at(from)), up)) < 0.5f;
-  };
+  // Thigh, shin and foot: the two longest consecutive bones of the chain end at the knee and
+  // the ankle (a short hip joint before them, toes and a toe tip after them do not count);
+  // the joint after the foot, if any, is the toes, whose direction gives forward.
+  const auto length = [&](int from, int to) { return glm::length(rig.at(to) - rig.at(from)); };
   std::vector<int> toes(legs.size(), -1);
   glm::vec3 forward(0.0f);
   for (std::size_t l = 0; l < legs.size(); ++l) {
     std::vector<int>& c = legs[l].chain;
-    if (c.size() >= 4 && horizontal(c[c.size() - 3], c[c.size() - 2]) &&
-        horizontal(c[c.size() - 2], c.back())) {
-      c.pop_back();  // an unnamed toe tip after the toes
+    if (c.size() < 3) continue;
+    std::size_t best = 0;
+    float best_length = -1.0f;
+    for (std::size_t i = 0; i + 2 < c.size(); ++i) {
+      const float sum = length(c[i], c[i + 1]) + length(c[i + 1], c[i + 2]);
+      if (sum > best_length + 1e-6f) {
+        best_length = sum;
+        best = i;
+      }
     }
-    if (c.size() >= 4 && horizontal(c[c.size() - 2], c.back())) {
-      toes[l] = c.back();
-      c.pop_back();
-      const glm::vec3 d = rig.at(toes[l]) - rig.at(c.back());
+    if (best + 3 < c.size()) {
+      toes[l] = c[best + 3];
+      const glm::vec3 d = rig.at(toes[l]) - rig.at(c[best + 2]);
       forward += d - glm::dot(d, up) * up;
     }
+    c.erase(c.begin() + static_cast<std::ptrdiff_t>(best + 3), c.end());
   }
   forward = safeNormalize(forward);
   if (glm::length(forward) < 0.5f) {
@@ -601,7 +607,20 @@ Result<JointMapChoice> inferJointMap(const Skeleton& skeleton) {
     if (a.count() > names.count()) names = std::move(a);
   }
   Rig rig(skeleton);
-  const Assignment topo = inferTopology(rig);
+  Assignment topo = inferTopology(rig);
+  // Where the names call the pose's right side left, topology fills with the names' sides
+  // (else it would hand a named side's joints to the other).
+  const bool mirrored = sideAgreement(names, topo) < 0;
+  if (mirrored) {
+    const auto canonical = canonicalJoints();
+    for (std::size_t c = 0; c < kCanonicalCount; ++c) {
+      if (!canonical[c].starts_with("l_")) continue;
+      const auto r = static_cast<std::size_t>(
+          canonicalIndex(std::string("r_") + std::string(canonical[c].substr(2))));
+      std::swap(topo.joint[c], topo.joint[r]);
+      std::swap(topo.origin[c], topo.origin[r]);
+    }
+  }
 
   // Names first; topology fills what they leave, with joints the names did not take.
   Assignment out = names.count() >= 3 ? names : Assignment{};
@@ -618,7 +637,7 @@ Result<JointMapChoice> inferJointMap(const Skeleton& skeleton) {
 
   JointMapChoice choice;
   choice.inferred = true;
-  if (sideAgreement(out, topo) < 0) {
+  if (mirrored) {
     choice.notes.push_back(
         "the joint names call the rest pose's right side left (a mirrored rig, or one facing "
         "away from its toes); the names' sides are kept");

@@ -301,6 +301,46 @@ TEST(InferJointMap, MirroredNamesKeepTheNamesAndSaySo) {
   EXPECT_NE(choice->notes[0].find("right side left"), std::string::npos) << choice->notes[0];
 }
 
+// Found by fuzz_auto_joint_map: legs were counted back from the end, and toes only where
+// the last bone ran within 60 degrees of horizontal, so a toe bone pointing down and forward
+// made the toes the foot and the shin the thigh. The knee and ankle are now where the two
+// longest consecutive bones end. And topology fills what the names leave with the names'
+// sides, also on a mirrored rig.
+TEST(InferJointMap, SlantedToesOnOneLegAndAnUnnamedShin) {
+  std::vector<Bone> bones;
+  for (Bone b : humanoidBones(false, true, true, false)) {
+    if (b.role == "r_toes") continue;                          // toes on one leg only
+    if (b.role == "l_toes") b.offset = {0.0f, -0.08f, 0.10f};  // 39 degrees below horizontal
+    bones.push_back(b);
+  }
+  const auto topo = madeUpNames(bones);
+  Result<JointMapChoice> by_topology = inferJointMap(makeSkeleton(bones, topo));
+  ASSERT_TRUE(by_topology.ok()) << by_topology.error().message;
+  expectMapsRoles(*by_topology, bones, topo, "topology");
+
+  const auto unnamed_shin = [](const std::string& role) {
+    return role == "l_shin" ? std::string("joint_17") : mixamoName(role);
+  };
+  Result<JointMapChoice> mixed = inferJointMap(makeSkeleton(bones, unnamed_shin));
+  ASSERT_TRUE(mixed.ok()) << mixed.error().message;
+  expectMapsRoles(*mixed, bones, unnamed_shin, "names and topology");
+
+  const auto mirrored_unnamed_shin = [](const std::string& role) {
+    if (role == "l_shin") return std::string("joint_17");
+    std::string n = mixamoName(role);
+    if (n.find("Left") != std::string::npos) return n.replace(n.find("Left"), 4, "Right");
+    if (n.find("Right") != std::string::npos) return n.replace(n.find("Right"), 5, "Left");
+    return n;
+  };
+  Result<JointMapChoice> mirrored = inferJointMap(makeSkeleton(bones, mirrored_unnamed_shin));
+  ASSERT_TRUE(mirrored.ok()) << mirrored.error().message;
+  // The names' left leg is the pose's right: its shin (named) and thigh; the pose's left
+  // shin, unnamed, goes with the names' right leg.
+  EXPECT_EQ(mirrored->map.jointFor("l_thigh"), "mixamorig:LeftUpLeg");
+  EXPECT_EQ(mirrored->map.jointFor("r_thigh"), "mixamorig:RightUpLeg");
+  EXPECT_EQ(mirrored->map.jointFor("r_shin"), "joint_17");
+}
+
 TEST(InferJointMap, NonHumanoidsAreRefusedNamingWhatIsMissing) {
   // A snake: one chain.
   Skeleton snake;
