@@ -564,6 +564,11 @@ Assignment inferTopology(Rig& rig) {
     const std::string s = i == li ? "l_" : "r_";
     const std::vector<int>& c = arm_chains[i];
     const std::size_t n = c.size();
+    if (n < 2) {
+      // A joint that forks at once into small chains: no upper arm and forearm to find.
+      rig.why.push_back(fmt::format("no {}arm: its chain forks at once into small branches", s));
+      continue;
+    }
     if (n == 2) {
       put(a, s + "upperarm", c[0], kTopology);
       put(a, s + "forearm", c[1], kTopology);
