@@ -22,12 +22,16 @@ void hermitePostures(const Posture* p, const Posture& a, const Posture& b, const
   const auto h01 = static_cast<float>(-2.0 * s3 + 3.0 * s2);
   const auto h11 = static_cast<float>((s3 - s2) * span);
   const float chord = span > 0.0 ? static_cast<float>(1.0 / span) : 0.0f;
-  const float before = p != nullptr ? static_cast<float>(1.0 / (b.time - p->time)) : 0.0f;
-  const float after = n != nullptr ? static_cast<float>(1.0 / (n->time - a.time)) : 0.0f;
+  // A neighbour at the same capture time as the far key (a sender's clock that stood still)
+  // gives no tangent: the chord's instead.
+  const bool use_p = p != nullptr && b.time - p->time > 0.0;
+  const bool use_n = n != nullptr && n->time - a.time > 0.0;
+  const float before = use_p ? static_cast<float>(1.0 / (b.time - p->time)) : 0.0f;
+  const float after = use_n ? static_cast<float>(1.0 / (n->time - a.time)) : 0.0f;
   const auto cubic = [&](const glm::vec4& vp, const glm::vec4& va, const glm::vec4& vb,
                          const glm::vec4& vn) {
-    const glm::vec4 ma = p != nullptr ? (vb - vp) * before : (vb - va) * chord;
-    const glm::vec4 mb = n != nullptr ? (vn - va) * after : (vb - va) * chord;
+    const glm::vec4 ma = use_p ? (vb - vp) * before : (vb - va) * chord;
+    const glm::vec4 mb = use_n ? (vn - va) * after : (vb - va) * chord;
     return h00 * va + h10 * ma + h01 * vb + h11 * mb;
   };
   const glm::vec3 rp = p != nullptr ? p->root_translation : a.root_translation;

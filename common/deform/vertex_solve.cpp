@@ -365,11 +365,7 @@ inline float writeSolved(const DeformFrame& fr, int v, const glm::vec3& p0, cons
 
 }  // namespace
 
-// Pass B's short way for the commonest solved vertex, the lone limb vertex: a limb vertex of
-// one primitive (no bone), not fixed (DeformScratch::fixed_kind), that has no collider and no
-// elastic memory this frame and is projected along its normal, as it was last frame (see
-// solveLoneLimb). Its part that never changes (DeformScratch::lone_kind); passSolve tests the
-// rest.
+// (See vertex_solve.hpp.)
 float skinnedShare(const DeformFrame& fr, std::size_t vi) {
   const std::vector<float>& own = fr.model->calibration.own_weight;
   const float lo = fr.opt->own_fade_low, hi = fr.opt->own_fade_high;
@@ -378,6 +374,11 @@ float skinnedShare(const DeformFrame& fr, std::size_t vi) {
   return (hi - own[vi]) / (hi - lo);
 }
 
+// Pass B's short way for the commonest solved vertex, the lone limb vertex: a limb vertex of
+// one primitive (no bone), not fixed (DeformScratch::fixed_kind), that has no collider and no
+// elastic memory this frame and is projected along its normal, as it was last frame (see
+// solveLoneLimb). Its part that never changes (DeformScratch::lone_kind); passSolve tests the
+// rest.
 bool loneKind(const Calibration& cal, std::size_t vi, bool fixed) {
   const auto& pr = cal.prims[vi];
   return !fixed && cal.vertex_class[vi] == VertexClass::kLimb && pr[3] < 0 && pr[0] >= 0;

@@ -1,4 +1,6 @@
 // The jitter buffer: order, duplicates, staleness, interpolation.
+#include <cmath>
+
 #include <gtest/gtest.h>
 
 #include "client/net/jitter_buffer.hpp"
@@ -54,6 +56,38 @@ TEST(JitterBuffer, InterpolatesAndHoldsAtTheEnds) {
   EXPECT_NEAR(p.root_translation.x, 2.0f, 1e-6f);
   JitterBuffer empty(2);
   EXPECT_FALSE(empty.sample(1.0, p));
+}
+
+// The cubic through the neighbours: velocity continuous across a key (a blend of the two
+// around t would jump from 1 to 3 m/s at t = 1), the keys themselves exact, and a sender
+// whose clock stood still (equal capture times) gives finite postures.
+TEST(JitterBuffer, InterpolatesAlongACubicThroughTheNeighbours) {
+  JitterBuffer b(8);
+  b.push(1, at(0.0, 0.0f));
+  b.push(2, at(1.0, 1.0f));
+  b.push(3, at(2.0, 4.0f));
+  b.push(4, at(3.0, 9.0f));
+  Posture p, q;
+  const double h = 1e-3;
+  ASSERT_TRUE(b.sample(1.0 - h, p));
+  ASSERT_TRUE(b.sample(1.0 + h, q));
+  const float left = (1.0f - p.root_translation.x) / static_cast<float>(h);
+  const float right = (q.root_translation.x - 1.0f) / static_cast<float>(h);
+  EXPECT_NEAR(left, right, 0.05f) << "velocity just before and after the key";
+  EXPECT_NEAR(left, 2.0f, 0.05f);  // the Catmull-Rom tangent (4 - 0) / 2
+  ASSERT_TRUE(b.sample(2.0, p));
+  EXPECT_NEAR(p.root_translation.x, 4.0f, 1e-5f);
+
+  JitterBuffer still(8);
+  still.push(1, at(1.0, 0.0f, 0.0f));
+  still.push(2, at(1.0, 1.0f, 0.5f));
+  still.push(3, at(1.0, 2.0f, 1.0f));
+  still.push(4, at(2.0, 3.0f, 1.5f));
+  for (const double t : {0.5, 1.0, 1.5, 2.0}) {
+    ASSERT_TRUE(still.sample(t, p));
+    EXPECT_TRUE(std::isfinite(p.root_translation.x)) << t;
+    EXPECT_TRUE(std::isfinite(p.rotations[0].w)) << t;
+  }
 }
 
 }  // namespace
