@@ -5,7 +5,7 @@
 // datagrams it has seen.
 //
 // Input: a script of operations, each an op byte (bits 0-2: kind, bits 3-4: participant
-// 0..2, 3 meaning 0) and its operands:
+// 0..2, 3 meaning 2) and its operands:
 //   0 advance u8: (n + 1) * 5 ms, every live participant sending postures at 30 Hz
 //   1 link u8 loss, u8 duplicates, u8 jitter: its links both ways become
 //     loss n / 510, duplicates n / 1275, jitter n * 0.4 ms (latency 10 ms)
