@@ -528,6 +528,7 @@ int main(int argc, char** argv) {
           remote_jitter->measure(f.id, f.name, model->skeleton, f.shown_time, f.posture, playback);
         }
       }
+      remote_jitter->endFrame();
     }
     // Draw (the view skins every avatar in its worker pool).
     if (view) {

@@ -26,8 +26,6 @@ class MotionJerk {
   // every call: a different count starts the stream again). Returns the sample's jerk
   // (m/s^3), or -1 while the window fills or when the sample is skipped.
   double add(double t, std::span<const glm::vec3> points);
-  // Starts the stream again (the next three samples only fill the window); keeps the sums.
-  void restart() { filled_ = 0; }
   // Adds a value measured elsewhere to the sums (totals over streams).
   void addValue(double jerk) {
     sum_ += jerk;

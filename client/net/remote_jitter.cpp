@@ -1,11 +1,10 @@
 #include "client/net/remote_jitter.hpp"
 
-#include <algorithm>
-
 namespace vistel::net {
 
 void RemoteJitter::collect(const RemoteMember& m) {
   Track& tr = tracks_[m.id];
+  tr.frame = frame_;
   tr.count = 0;
   for (const Posture* p = m.buffer.firstAfter(tr.last_sent);
        p != nullptr && tr.count < kMaxSentPerFrame; p = m.buffer.firstAfter(p->time)) {
@@ -41,10 +40,9 @@ void RemoteJitter::measure(std::uint32_t id, const std::string& name, const Skel
   stats.addDrawn(name, t, tr.points);
 }
 
-void RemoteJitter::keepOnly(const std::vector<std::uint32_t>& present) {
-  std::erase_if(tracks_, [&](const auto& kv) {
-    return std::find(present.begin(), present.end(), kv.first) == present.end();
-  });
+void RemoteJitter::endFrame() {
+  std::erase_if(tracks_, [&](const auto& kv) { return kv.second.frame != frame_; });
+  ++frame_;
 }
 
 }  // namespace vistel::net

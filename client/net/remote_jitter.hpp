@@ -28,18 +28,20 @@ class RemoteJitter {
  public:
   static constexpr int kMaxSentPerFrame = 64;  // newer postures copied per member and frame
 
-  // Under the session lock: copies the postures remote member m received since the last call.
+  // Under the session lock, every frame: copies the postures remote member m received since
+  // the last call.
   void collect(const RemoteMember& m);
   // After it: the drawn posture (at playback time t, server clock) and the collected ones on
   // the member's skeleton into stats (postures whose joint count differs are skipped).
   void measure(std::uint32_t id, const std::string& name, const Skeleton& skeleton, double t,
                const Posture& drawn, PlaybackStats& stats);
-  // Forgets members no longer in the room (ids not in `present`).
-  void keepOnly(const std::vector<std::uint32_t>& present);
+  // After the frame's collect() calls: forgets the members none was made for (they left).
+  void endFrame();
 
  private:
   struct Track {
     double last_sent = -std::numeric_limits<double>::infinity();
+    std::uint64_t frame = 0;  // the last frame collect() saw the member
     std::vector<Posture> sent;
     int count = 0;
     std::vector<glm::mat4> model;
@@ -48,6 +50,7 @@ class RemoteJitter {
   void positions(const Skeleton& skeleton, const Posture& posture, Track& track);
 
   std::unordered_map<std::uint32_t, Track> tracks_;
+  std::uint64_t frame_ = 1;
 };
 
 }  // namespace vistel::net

@@ -2,7 +2,7 @@
 // real state machines of three participants (ClientSession) and the server (ServerCore)
 // run over the in-process simulated network (tests/net/sim_network.hpp) while the input
 // cuts and restarts connections, degrades links, and forges, mutates and replays the
-// datagrams it has seen.
+// datagrams the participants send.
 //
 // Input: a script of operations, each an op byte (bits 0-2: kind, bits 3-4: participant
 // 0..2, 3 meaning 2) and its operands:
@@ -10,9 +10,9 @@
 //   1 link u8 loss, u8 duplicates, u8 jitter: its links both ways become
 //     loss n / 510, duplicates n / 1275, jitter n * 0.4 ms (latency 10 ms)
 //   2 cut: its TCP connection dies          3 restart: a new session on a new connection
-//   4 forge u8 which, u8 where, u8 xor: one of the last 32 datagrams seen, a byte changed,
+//   4 forge u8 which, u8 where, u8 xor: one of the last 32 datagrams sent, a byte changed,
 //     sent from the participant's address (bit 7 of which: from a stranger's)
-//   5 replay u8 which: one of the last 32 datagrams seen, unchanged, from the participant's
+//   5 replay u8 which: one of the last 32 datagrams sent, unchanged, from the participant's
 //     address (bit 7: from the next participant's)
 //   6 garbage u8 length, bytes: a datagram from the participant's address
 //   7 stall u8: (n + 1) * 50 ms with no postures sent (timeouts and keepalives)
@@ -27,7 +27,6 @@
 #include <array>
 #include <cstdint>
 #include <cstdio>
-#include <deque>
 #include <span>
 #include <string>
 #include <vector>
@@ -93,10 +92,7 @@ class Run {
     for (int i = 0; i < kParticipants; ++i) {
       net_.addClient(settingsOf(i), test::SimLink{}, test::SimLink{}, 0.25 * i);
     }
-    net_.tap = [this](const std::vector<std::uint8_t>& d) {
-      if (seen_.size() == kSeen) seen_.pop_front();
-      seen_.push_back(d);
-    };
+    net_.sniff(true);
     for (int i = 0; i < kParticipants; ++i) net_.connect(static_cast<std::size_t>(i));
   }
 
@@ -127,17 +123,17 @@ class Run {
           break;
         case kForge: {
           const std::uint8_t which = r.u8(), where = r.u8(), x = r.u8();
-          if (seen_.empty()) break;
-          std::vector<std::uint8_t> d = seen_[(which & 0x7F) % seen_.size()];
+          if (net_.sniffed().empty()) break;
+          std::vector<std::uint8_t> d = recent(which);
           if (!d.empty()) d[where % d.size()] ^= x;
           net_.injectDatagram(std::move(d), (which & 0x80) != 0 ? stranger() : address(who));
           break;
         }
         case kReplay: {
           const std::uint8_t which = r.u8();
-          if (seen_.empty()) break;
+          if (net_.sniffed().empty()) break;
           const int from = (which & 0x80) != 0 ? (who + 1) % kParticipants : who;
-          net_.injectDatagram(seen_[(which & 0x7F) % seen_.size()], address(from));
+          net_.injectDatagram(recent(which), address(from));
           break;
         }
         case kGarbage: {
@@ -187,6 +183,13 @@ class Run {
   }
 
  private:
+  // One of the last kSeen datagrams the participants sent (by the low 7 bits of `which`).
+  std::vector<std::uint8_t> recent(std::uint8_t which) const {
+    const auto& all = net_.sniffed();
+    const std::size_t n = std::min(all.size(), kSeen);
+    return all[all.size() - n + (which & 0x7F) % n].bytes;
+  }
+
   wire::Endpoint address(int i) { return net_.client(static_cast<std::size_t>(i)).endpoint; }
   static wire::Endpoint stranger() { return wire::Endpoint::ipv4(0x7F000063u, 50999); }
 
@@ -217,7 +220,6 @@ class Run {
   }
 
   test::SimNetwork net_;
-  std::deque<std::vector<std::uint8_t>> seen_;
   double next_send_ = 0.0;
 };
 

@@ -95,5 +95,35 @@ TEST(RemoteJitter, InterpolationAddsLittleJitterAndStutterAddsMuch) {
   EXPECT_NEAR(doc["members"]["alice"]["jerk"]["ratio"].get<double>(), smooth_ratio, 1e-9);
 }
 
+// A member not collected in a frame has left: endFrame forgets it, and measure then adds
+// nothing for it.
+TEST(RemoteJitter, ForgetsMembersThatLeft) {
+  Skeleton s;
+  s.names = {"root"};
+  s.parents = {kNoParent};
+  s.rest_local.resize(1);
+  s.inverse_bind.assign(1, glm::mat4(1.0f));
+  RemoteMember m;
+  m.id = 3;
+  m.name = "bob";
+  Posture p;
+  p.rotations.assign(1, glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
+  PlaybackStats stats;
+  RemoteJitter jitter;
+  for (int f = 0; f < 6; ++f) {
+    p.time = f * 0.01;
+    p.root_translation.x = static_cast<float>(f * f) * 0.01f;
+    jitter.collect(m);
+    jitter.measure(m.id, m.name, s, p.time, p, stats);
+    jitter.endFrame();
+  }
+  const std::uint64_t drawn = stats.members().at("bob").drawn_jerk.count();
+  EXPECT_EQ(drawn, 3u);  // the first three fill the window
+  jitter.endFrame();     // a frame without bob
+  p.time = 0.06;
+  jitter.measure(m.id, m.name, s, p.time, p, stats);
+  EXPECT_EQ(stats.members().at("bob").drawn_jerk.count(), drawn);
+}
+
 }  // namespace
 }  // namespace vistel::net

@@ -94,10 +94,6 @@ class SimNetwork {
     c.tcp_up_free = c.tcp_down_free = now_;
     connect(i);
   }
-  // Sees every UDP datagram a client or the server sends (before the link model), e.g.
-  // to replay or forge them.
-  std::function<void(const std::vector<std::uint8_t>&)> tap;
-
   // Raw traffic from a misbehaving peer (not a session).
   void injectDatagram(std::vector<std::uint8_t> bytes, const wire::Endpoint& from,
                       double delay = 0.0) {
@@ -199,7 +195,6 @@ class SimNetwork {
   void flushServer() {
     server::Effects& fx = server_.effects();
     for (server::OutDatagram& d : fx.datagrams) {
-      if (tap) tap(d.bytes);
       Client* c = clientAt(d.to);
       if (c == nullptr) {
         raw_datagrams_[d.to.toString()].push_back(std::move(d.bytes));
@@ -249,7 +244,6 @@ class SimNetwork {
       });
     }
     for (auto& d : out.datagrams) {
-      if (tap) tap(d);
       if (sniffing_) sniffed_.push_back({i, d});
       sendDatagram(c.up, [this, from = c.endpoint, bytes = std::move(d)] {
         server_.onDatagram(bytes, from, now_);
