@@ -11,6 +11,7 @@
 
 #include "common/deform/contact_forces.hpp"
 #include "common/deform/deform_scratch.hpp"
+#include "common/deform/face_orientation.hpp"
 #include "common/deform/relaxation.hpp"
 #include "common/deform/vertex_solve.hpp"
 
@@ -203,6 +204,7 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
   clock.lap(times.relax);
   const int smoothed = opt.smooth_passes > 0 ? smoothCorrections(fr) : 0;
   boundRelaxedMoves(fr);
+  const int reoriented = restoreFaceOrientation(fr);
   clock.lap(times.smooth);
   skinNormals(fr, pool);  // Step 3
   clock.lap(times.normals);
@@ -211,6 +213,7 @@ void deformSkin(const ImplicitModel& model, std::span<const BodyView> bodies, in
 
   st.counters = totalCounters(fr);
   st.counters.smoothed_vertices = smoothed;
+  st.counters.reoriented_vertices = reoriented;
   st.counters.phase_seconds = times;
 }
 

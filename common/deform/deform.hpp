@@ -27,6 +27,9 @@
 //     shaped their solution (touching, penetrating in the rigid pose, or near another body,
 //     which may bulge them): those keep it. At rest every correction is 0 and nothing moves.
 //     Also a departure from DESIGN.md, which leaves each vertex on its own surface.
+//     Last of all, a guard: a face turned inside out against the skinned skin outside
+//     contacts has its vertices' corrections pulled back until it is not
+//     (face_orientation.hpp).
 //   Step 3: normals of the deformed skin, contact flags and areas, pressures and reaction
 //     forces per partner body.
 // The code follows these steps: deform.cpp the driver (deformSkin: setup, pass A, pass B,
@@ -140,7 +143,8 @@ struct DeformPhaseTimes {
   double penetration = 0.0;  // the colliders, then pass A: candidates, rigid-pose penetrations
   double solve = 0.0;        // pass B: Step 2's root-finding, vertex by vertex
   double relax = 0.0;        // tangential relaxation
-  double smooth = 0.0;       // smoothing the joint regions' corrections
+  double smooth = 0.0;       // smoothing the joint regions' corrections, the move bound
+                             // and the face orientation guard
   double normals = 0.0;      // Step 3a
   double contacts = 0.0;     // Step 3b: contact areas and forces
 
@@ -174,6 +178,8 @@ struct DeformCounters {
   int gradient_vertices = 0;          // projected along -grad F (normal disagreed)
   int relaxed_vertices = 0;           // moved by tangential relaxation
   int smoothed_vertices = 0;          // moved by the smoothing of corrections
+  int reoriented_vertices = 0;        // pulled back so that no face is turned inside out
+                                      // outside contacts (face_orientation.hpp)
   int contact_vertices = 0;           // on a contact surface
   int candidate_overflow = 0;         // vertices with more colliders than kMaxCandidates
   int candidate_vertices = 0;         // vertices with at least one collision candidate

@@ -183,6 +183,12 @@ void initDeformScratch(const ImplicitModel& model, std::span<const std::uint32_t
   }
   sc.face_vertices.assign(indices.begin(), indices.end());
   sc.face_cross.assign(indices.size() / 3, glm::vec3(0.0f));
+  sc.orient_vertices.clear();
+  sc.orient_vertices.reserve(nv);
+  sc.orient_faces.clear();
+  sc.orient_faces.reserve(indices.size() / 3);
+  sc.orient_vertex_mark.assign(nv, 0);
+  sc.orient_face_mark.assign(indices.size() / 3, 0);
   // Vertex -> face adjacency.
   sc.vf_offsets.assign(nv + 1, 0);
   for (const std::uint32_t i : indices) ++sc.vf_offsets[i + 1];

@@ -101,24 +101,28 @@ struct DeformScratch {
   std::vector<std::uint32_t> contact_list;  // (nvert) the vertices in contact, each
                                             // chunk's from its first vertex on
   bool any_inelastic = false;  // a primitive is plastic or viscoelastic (free_offset is kept)
-  std::vector<std::uint8_t> fixed_kind;    // rigid limb or free vertex (nvert)
-  std::vector<std::uint8_t> resting;       // pass B: fixed, nothing near (nvert)
-  std::vector<std::uint8_t> lone_kind;     // limb vertex of one primitive, no bone, not
-                                           // fixed (nvert; see loneKind)
-  std::vector<std::uint32_t> solve_list;   // (nvert) pass B: the vertices solved the full
-                                           // way, each chunk's from its first vertex on
-  std::vector<std::uint32_t> lone_list;    // (nvert) pass B: the lone limb vertices, each
-                                           // chunk's from its first vertex on
-  std::vector<std::uint32_t> smooth_pool;  // joint vertices and the free ones
-                                           // beside them (init)
-  std::vector<std::uint32_t> smooth_list;  // those smoothed this frame (capacity:
-                                           // the pool's size)
-  std::vector<glm::vec3> correction;       // their corrections (nvert), and the
-  std::vector<glm::vec3> correction_next;  // next pass's (Jacobi)
-  std::vector<std::uint8_t> smooth_mark;   // in smooth_list (nvert; 0 between frames)
-  std::vector<glm::vec3> field_gradient;   // relaxed vertices: grad g where (or within
-                                           // a final Newton step of where) the last
-                                           // solve left them (NaN: not known)
+  std::vector<std::uint8_t> fixed_kind;          // rigid limb or free vertex (nvert)
+  std::vector<std::uint8_t> resting;             // pass B: fixed, nothing near (nvert)
+  std::vector<std::uint8_t> lone_kind;           // limb vertex of one primitive, no bone, not
+                                                 // fixed (nvert; see loneKind)
+  std::vector<std::uint32_t> solve_list;         // (nvert) pass B: the vertices solved the full
+                                                 // way, each chunk's from its first vertex on
+  std::vector<std::uint32_t> lone_list;          // (nvert) pass B: the lone limb vertices, each
+                                                 // chunk's from its first vertex on
+  std::vector<std::uint32_t> smooth_pool;        // joint vertices and the free ones
+                                                 // beside them (init)
+  std::vector<std::uint32_t> smooth_list;        // those smoothed this frame (capacity:
+                                                 // the pool's size)
+  std::vector<glm::vec3> correction;             // their corrections (nvert), and the
+  std::vector<glm::vec3> correction_next;        // next pass's (Jacobi)
+  std::vector<std::uint8_t> smooth_mark;         // in smooth_list (nvert; 0 between frames)
+  std::vector<std::uint32_t> orient_vertices;    // face orientation guard: vertices (nvert
+  std::vector<std::uint32_t> orient_faces;       // capacity) and inverted faces (ntri)
+  std::vector<std::uint8_t> orient_vertex_mark;  // (nvert; 0 between frames)
+  std::vector<std::uint8_t> orient_face_mark;    // (ntri; 0 between frames)
+  std::vector<glm::vec3> field_gradient;         // relaxed vertices: grad g where (or within
+                                                 // a final Newton step of where) the last
+                                                 // solve left them (NaN: not known)
   std::vector<DeformCounters> chunk_counters;
   std::vector<glm::mat4> prim_to_world;  // (nprim) bind-pose model space -> world, per
                                          // primitive's bone this frame

@@ -133,8 +133,10 @@ void gatherOwn(const DeformFrame& fr, int v, VertexProblem& vp) {
   // The faded own surface: w_v D_v solved for T shifted by the share of the skinned
   // position's own excess (0 there for a fully faded vertex: its skinned position).
   vp.target = vp.iso;
+  vp.faded = 0.0f;
   if (vp.cls != VertexClass::kFree) {
     const float keep = skinnedShare(fr, vi);
+    vp.faded = keep;
     if (keep > 0.0f) {
       glm::vec3 grad;
       FieldValues lanes;
@@ -177,6 +179,12 @@ void gatherOwn(const DeformFrame& fr, int v, VertexProblem& vp) {
     cd.omega = cs.omega;
     cd.iso = cs.iso;
     cd.x_rigid = cs.x_rigid;
+    // A faded joint vertex's opposite limb is part of the own field it fades (DIFF's other
+    // side): its crease starts from the skinned position's value, not from the rest one.
+    if (vp.faded > 0.0f && vp.cls == VertexClass::kJoint && cd.prim == vp.own[2]) {
+      const float excess = cd.omega * primitiveField(*cd.prim, vp.p0) - cd.iso;
+      if (excess > 0.0f) cd.iso += vp.faded * excess;
+    }
     const float pmax = std::bit_cast<float>(col.pmax_bits);
     const bool bulges = with_bulge && (col.body != fr.self || fr.opt->self_propagation);
     cd.bulge = bulges ? propagationBulge(cd.share, vp.w, amplitude, pmax) : 0.0f;

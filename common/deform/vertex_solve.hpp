@@ -54,6 +54,7 @@ struct VertexProblem {
   float iso = 0.5f;
   float target = 0.5f;  // what w_v D_v is solved for: iso, shifted towards the skinned
                         // position's own value where the own field is faded (ownFade)
+  float faded = 0.0f;   // the faded share (skinnedShare) of a limb or joint vertex
   int diff_exponent = 4;
   glm::vec3 p0{0.0f};      // origin of the projection line (the rigid position)
   bool p0_rigid = false;   // a free vertex's p0, its rigid position (where the candidates'

@@ -1,12 +1,14 @@
 // The skin the deformable component makes on real avatars playing the shared clips, frame
 // by frame against dual-quaternion skinning of the same frames (issue 25). Asserted: no
-// spikes (no vertex moved farther than what it resolves allows, see allowance()). Measured
-// and printed, not yet asserted: folds away from contacts (self-intersecting triangle pairs
-// against skinning, in total and in each body region; faces turned inside out). With the
-// own field faded where the skinning leaves the bones it models, they are at or below
-// skinning's on most clips; what remains (a few pairs and faces at the shoulders and hips
-// of the CMU clips, where the opposite limb's term pushes a vertex that is not marked in
-// contact) is issue 25's "no new folds". The clips are motion the model was not tuned on.
+// spikes (no vertex moved farther than what it resolves allows, see allowance()) and no
+// face turned inside out against skinning away from contacts (restoreFaceOrientation()
+// keeps that). Measured and printed, not yet asserted: folds away from contacts
+// (self-intersecting triangle pairs against skinning, in total and in each body region).
+// Over every one of the 96 frames they total at or below skinning's on both avatars and all
+// shared clips but two CMU clips on the default avatar (371 against 340, 342 against 330);
+// what remains per region is a few pairs at the hips and knees of the CMU clips, where the
+// own field pushes out beside vertices whose field is faded (the primitives lie inside the
+// skin, issue 25 item 5). The clips are motion the model was not tuned on.
 #include <algorithm>
 #include <cstdio>
 #include <map>
@@ -190,6 +192,8 @@ void check(const std::string& avatar, const std::string& clip_name, const ClipMe
   EXPECT_EQ(m.spikes, 0) << avatar << " " << clip_name << ": vertex " << m.worst_vertex << " frame "
                          << m.worst_frame << " moved " << m.worst_move << " m, " << m.worst_excess
                          << " m beyond its allowance";
+  EXPECT_EQ(m.inverted, 0) << avatar << " " << clip_name
+                           << ": faces turned inside out against skinning away from contacts";
   std::printf("  regions with more intersecting pairs than skinning: %zu region-frames%s%s\n",
               m.fold_failures.size(), m.fold_failures.empty() ? "" : ", first: ",
               m.fold_failures.empty() ? "" : m.fold_failures.front().c_str());
