@@ -1,6 +1,8 @@
 #include "client/render/gpu_mesh.hpp"
 
+#include <algorithm>
 #include <cassert>
+#include <cstdint>
 
 namespace vistel {
 
@@ -8,10 +10,10 @@ GpuMesh::~GpuMesh() { release(); }
 
 void GpuMesh::release() {
   if (vao_ == 0) return;
-  const GLuint buffers[] = {positions_, normals_, indices_};
-  glDeleteBuffers(3, buffers);
+  const GLuint buffers[] = {positions_, normals_, indices_, uvs_};
+  glDeleteBuffers(uvs_ != 0 ? 4 : 3, buffers);
   glDeleteVertexArrays(1, &vao_);
-  vao_ = positions_ = normals_ = indices_ = 0;
+  vao_ = positions_ = normals_ = indices_ = uvs_ = 0;
   vertex_count_ = 0;
   index_count_ = 0;
 }
@@ -57,6 +59,29 @@ void GpuMesh::upload(std::span<const glm::vec3> positions, std::span<const glm::
   glBufferData(GL_ARRAY_BUFFER, bytes, nullptr, GL_DYNAMIC_DRAW);
   glBufferSubData(GL_ARRAY_BUFFER, 0, bytes, normals.data());
   glBindBuffer(GL_ARRAY_BUFFER, 0);
+}
+
+void GpuMesh::attachUvs(std::span<const glm::vec2> uvs) {
+  if (vao_ == 0 || static_cast<int>(uvs.size()) != vertex_count_) return;
+  glBindVertexArray(vao_);
+  if (uvs_ == 0) glGenBuffers(1, &uvs_);
+  glBindBuffer(GL_ARRAY_BUFFER, uvs_);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(uvs.size_bytes()), uvs.data(),
+               GL_STATIC_DRAW);
+  glVertexAttribPointer(6, 2, GL_FLOAT, GL_FALSE, sizeof(glm::vec2), nullptr);
+  glEnableVertexAttribArray(6);
+  glBindVertexArray(0);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+}
+
+void GpuMesh::drawRange(std::uint32_t first, std::uint32_t count) const {
+  const auto total = static_cast<std::uint32_t>(index_count_);
+  if (vao_ == 0 || first >= total) return;
+  count = std::min(count, total - first);
+  glBindVertexArray(vao_);
+  glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
+                 reinterpret_cast<const void*>(std::uintptr_t{first} * sizeof(std::uint32_t)));
+  glBindVertexArray(0);
 }
 
 void GpuMesh::draw() const {

@@ -1,6 +1,8 @@
 #include "client/render/gpu_skin_mesh.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cstdint>
 #include <vector>
 
 namespace vistel {
@@ -10,6 +12,8 @@ GpuSkinMesh::~GpuSkinMesh() { release(); }
 void GpuSkinMesh::release() {
   if (vao_ == 0) return;
   glDeleteBuffers(7, buffers_);
+  if (uvs_ != 0) glDeleteBuffers(1, &uvs_);
+  uvs_ = 0;
   glDeleteVertexArrays(1, &vao_);
   vao_ = 0;
   for (GLuint& b : buffers_) b = 0;
@@ -90,8 +94,27 @@ void GpuSkinMesh::uploadOffsets(std::span<const glm::vec3> positions,
   glBindBuffer(GL_ARRAY_BUFFER, 0);
 }
 
+void GpuSkinMesh::attachUvs(std::span<const glm::vec2> uvs) {
+  if (vao_ == 0 || static_cast<int>(uvs.size()) != vertex_count_) return;
+  glBindVertexArray(vao_);
+  if (uvs_ == 0) glGenBuffers(1, &uvs_);
+  glBindBuffer(GL_ARRAY_BUFFER, uvs_);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(uvs.size_bytes()), uvs.data(),
+               GL_STATIC_DRAW);
+  glVertexAttribPointer(6, 2, GL_FLOAT, GL_FALSE, sizeof(glm::vec2), nullptr);
+  glEnableVertexAttribArray(6);
+  glBindVertexArray(0);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+}
+
 void GpuSkinMesh::draw(bool with_offsets) const {
-  if (vao_ == 0 || index_count_ == 0) return;
+  drawRange(with_offsets, 0, static_cast<std::uint32_t>(index_count_));
+}
+
+void GpuSkinMesh::drawRange(bool with_offsets, std::uint32_t first, std::uint32_t count) const {
+  const auto total = static_cast<std::uint32_t>(index_count_);
+  if (vao_ == 0 || first >= total) return;
+  count = std::min(count, total - first);
   glBindVertexArray(vao_);
   // Without offsets the arrays are off and the attributes read the constant 0.
   for (const GLuint location : {4u, 5u}) {
@@ -102,7 +125,8 @@ void GpuSkinMesh::draw(bool with_offsets) const {
       glVertexAttrib3f(location, 0.0f, 0.0f, 0.0f);
     }
   }
-  glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
+  glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
+                 reinterpret_cast<const void*>(std::uintptr_t{first} * sizeof(std::uint32_t)));
   glBindVertexArray(0);
 }
 

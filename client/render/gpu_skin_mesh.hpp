@@ -44,6 +44,10 @@ class GpuSkinMesh {
   // 1 = normal, 2 = joints (uvec4), 3 = weights, 4 = position offset, 5 = normal offset),
   // with the uploaded offsets or with none.
   void draw(bool with_offsets) const;
+  // Fixed texture coordinates (nvert of them; others ignored) as attribute 6.
+  void attachUvs(std::span<const glm::vec2> uvs);
+  // As draw, for indices [first, first + count) only (clamped to the mesh's).
+  void drawRange(bool with_offsets, std::uint32_t first, std::uint32_t count) const;
 
   bool empty() const { return vao_ == 0; }
   int jointCount() const { return joint_count_; }
@@ -54,6 +58,7 @@ class GpuSkinMesh {
   GLuint vao_ = 0;
   // positions, normals, joints, weights, indices, position offsets, normal offsets
   GLuint buffers_[7] = {0, 0, 0, 0, 0, 0, 0};
+  GLuint uvs_ = 0;  // texture coordinates (attachUvs)
   GLsizei index_count_ = 0;
   int vertex_count_ = 0;
   int joint_count_ = 0;

@@ -50,8 +50,9 @@ Status RenderTarget::resize(int width, int height, int samples) {
   resolve_color_ = makeRenderbuffer(GL_RGBA8, width, height, 0);
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, resolve_color_);
   if (samples == 0) {
-    resolve_depth_ = makeRenderbuffer(GL_DEPTH_COMPONENT24, width, height, 0);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, resolve_depth_);
+    resolve_depth_ = makeRenderbuffer(GL_DEPTH24_STENCIL8, width, height, 0);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
+                              resolve_depth_);
   }
   if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
     release();
@@ -63,9 +64,10 @@ Status RenderTarget::resize(int width, int height, int samples) {
     glGenFramebuffers(1, &draw_fbo_);
     glBindFramebuffer(GL_FRAMEBUFFER, draw_fbo_);
     draw_color_ = makeRenderbuffer(GL_RGBA8, width, height, samples);
-    draw_depth_ = makeRenderbuffer(GL_DEPTH_COMPONENT24, width, height, samples);
+    draw_depth_ = makeRenderbuffer(GL_DEPTH24_STENCIL8, width, height, samples);
     glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, draw_color_);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, draw_depth_);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
+                              draw_depth_);
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
       release();
       return fail("multisampled framebuffer {}x{} ({} samples) is incomplete", width, height,

@@ -1,5 +1,6 @@
 // The offscreen framebuffer every frame is drawn into: a multisampled colour + depth
 // target resolved into a single-sample one, which screenshots read and a window shows.
+// Depth has 24 bits and a stencil of 8 (the shadows mark the pixels they darkened).
 #pragma once
 
 #include <epoxy/gl.h>

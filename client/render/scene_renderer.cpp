@@ -1,6 +1,7 @@
 #include "client/render/scene_renderer.hpp"
 
 #include <array>
+#include <string>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
@@ -124,6 +125,79 @@ void main() {
 }
 )";
 
+// The look's fragment shader: base colour (linear factor x sRGB texture, decoded by the
+// sampler), optional normal map (tangent frame from screen-space derivatives, glTF's +Y
+// up = towards -v), lighting in linear light, explicit linear -> sRGB encoding.
+constexpr const char* kLookFragment = R"(#version 330 core
+in vec3 v_world;
+in vec3 v_normal;
+in vec2 v_uv;
+uniform vec3 u_eye;
+uniform vec3 u_light;  // unit direction towards the light
+uniform vec4 u_base_color;
+uniform vec3 u_tint;
+uniform sampler2D u_base_tex;
+uniform sampler2D u_normal_tex;
+uniform bool u_has_normal_map;
+uniform float u_normal_scale;
+uniform float u_alpha_cutoff;  // < 0: opaque
+out vec4 o_color;
+vec3 toSrgb(vec3 c) {
+  c = clamp(c, 0.0, 1.0);
+  return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
+}
+void main() {
+  vec4 base = u_base_color * texture(u_base_tex, v_uv);
+  if (u_alpha_cutoff >= 0.0 && base.a < u_alpha_cutoff) discard;
+  vec3 n = normalize(v_normal);
+  if (!gl_FrontFacing) n = -n;
+  if (u_has_normal_map) {
+    vec3 dp1 = dFdx(v_world);
+    vec3 dp2 = dFdy(v_world);
+    vec2 duv1 = dFdx(v_uv);
+    vec2 duv2 = dFdy(v_uv);
+    vec3 dp2perp = cross(dp2, n);
+    vec3 dp1perp = cross(n, dp1);
+    vec3 t = dp2perp * duv1.x + dp1perp * duv2.x;
+    vec3 b = -(dp2perp * duv1.y + dp1perp * duv2.y);
+    float len2 = max(dot(t, t), dot(b, b));
+    if (len2 > 1e-20) {
+      float s = inversesqrt(len2);
+      vec3 m = texture(u_normal_tex, v_uv).xyz * 2.0 - 1.0;
+      m.xy *= u_normal_scale;
+      vec3 mapped = mat3(t * s, b * s, n) * m;
+      if (dot(mapped, mapped) > 1e-12) n = normalize(mapped);
+    }
+  }
+  // Linear light: a hemisphere ambient (sky above, ground bounce below) and the key light.
+  vec3 ambient = mix(vec3(0.11, 0.095, 0.085), vec3(0.22, 0.24, 0.28), 0.5 + 0.5 * n.y);
+  float diffuse = max(dot(n, u_light), 0.0);
+  vec3 v = normalize(u_eye - v_world);
+  vec3 h = normalize(v + u_light);
+  float highlight = 0.03 * pow(max(dot(n, h), 0.0), 32.0);
+  vec3 albedo = base.rgb * u_tint;
+  vec3 c = albedo * (ambient + 0.85 * diffuse * vec3(1.0, 0.96, 0.90)) + vec3(highlight);
+  o_color = vec4(toSrgb(c), 1.0);
+}
+)";
+
+constexpr const char* kShadowFragment = R"(#version 330 core
+uniform float u_alpha;
+out vec4 o_color;
+void main() { o_color = vec4(0.0, 0.0, 0.0, u_alpha); }
+)";
+
+// A vertex shader with texture coordinates passed through (attribute 6).
+std::string withUvs(const char* vertex_source) {
+  std::string s(vertex_source);
+  const std::string decl = "out vec3 v_normal;\n";
+  s.replace(s.find(decl), decl.size(),
+            decl + "layout(location = 6) in vec2 a_uv;\nout vec2 v_uv;\n");
+  const std::string last = "  gl_Position = u_view_proj * world;\n";
+  s.replace(s.find(last), last.size(), "  v_uv = a_uv;\n" + last);
+  return s;
+}
+
 // An octahedron with flat face normals (24 vertices), unit height, centred at 0.
 void buildDiamond(std::array<glm::vec3, 24>& positions, std::array<glm::vec3, 24>& normals) {
   const glm::vec3 top(0, 0.5f, 0), bottom(0, -0.5f, 0);
@@ -164,6 +238,13 @@ glm::vec3 tintedSkin(const glm::vec3& member_color) {
 }
 
 SceneRenderer::~SceneRenderer() {
+  for (GLuint p : {look_program_.program, gpu_look_program_.program, shadow_program_.program,
+                   gpu_shadow_program_.program}) {
+    if (p != 0) glDeleteProgram(p);
+  }
+  for (GLuint t : {white_texture_, flat_normal_texture_}) {
+    if (t != 0) glDeleteTextures(1, &t);
+  }
   if (skin_program_ != 0) glDeleteProgram(skin_program_);
   if (gpu_skin_program_ != 0) glDeleteProgram(gpu_skin_program_);
   if (floor_program_ != 0) glDeleteProgram(floor_program_);
@@ -221,7 +302,187 @@ Status SceneRenderer::init() {
   for (std::uint32_t i = 0; i < 24; ++i) indices[i] = i;
   marker_.create(24, indices);
   marker_.upload(positions, normals);
+  return initLook();
+}
+
+Status SceneRenderer::initLook() {
+  // Optional uniforms (a program may not use every one).
+  auto loc = [](GLuint program, const char* name) { return glGetUniformLocation(program, name); };
+  auto makeLook = [&](const char* name, const std::string& vertex, LookProgram& out) -> Status {
+    auto program = buildProgram(name, vertex.c_str(), kLookFragment);
+    if (!program) return program.error();
+    out.program = *program;
+    out.model = loc(out.program, "u_model");
+    out.view_proj = loc(out.program, "u_view_proj");
+    out.normal_matrix = loc(out.program, "u_normal_matrix");
+    out.eye = loc(out.program, "u_eye");
+    out.light = loc(out.program, "u_light");
+    out.base_color = loc(out.program, "u_base_color");
+    out.tint = loc(out.program, "u_tint");
+    out.has_normal_map = loc(out.program, "u_has_normal_map");
+    out.normal_scale = loc(out.program, "u_normal_scale");
+    out.alpha_cutoff = loc(out.program, "u_alpha_cutoff");
+    out.joints = loc(out.program, "u_dq");
+    glUseProgram(out.program);
+    glUniform1i(loc(out.program, "u_base_tex"), 0);
+    glUniform1i(loc(out.program, "u_normal_tex"), 1);
+    glUseProgram(0);
+    return {};
+  };
+  if (Status s = makeLook("look", withUvs(kSkinVertex), look_program_); !s) return s;
+  if (Status s = makeLook("gpu look", withUvs(kGpuSkinVertex), gpu_look_program_); !s) return s;
+  auto makeShadow = [&](const char* name, const char* vertex, ShadowProgram& out) -> Status {
+    auto program = buildProgram(name, vertex, kShadowFragment);
+    if (!program) return program.error();
+    out.program = *program;
+    out.model = loc(out.program, "u_model");
+    out.view_proj = loc(out.program, "u_view_proj");
+    out.joints = loc(out.program, "u_dq");
+    out.alpha = loc(out.program, "u_alpha");
+    return {};
+  };
+  if (Status s = makeShadow("shadow", kSkinVertex, shadow_program_); !s) return s;
+  if (Status s = makeShadow("gpu shadow", kGpuSkinVertex, gpu_shadow_program_); !s) return s;
+
+  // 1x1 stand-ins: white (no base texture), a flat normal (no normal map).
+  auto pixel = [](GLenum format, const std::uint8_t(&rgba)[4]) {
+    GLuint tex = 0;
+    glGenTextures(1, &tex);
+    glBindTexture(GL_TEXTURE_2D, tex);
+    glTexImage2D(GL_TEXTURE_2D, 0, static_cast<GLint>(format), 1, 1, 0, GL_RGBA, GL_UNSIGNED_BYTE,
+                 rgba);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glBindTexture(GL_TEXTURE_2D, 0);
+    return tex;
+  };
+  white_texture_ = pixel(GL_SRGB8_ALPHA8, {255, 255, 255, 255});
+  flat_normal_texture_ = pixel(GL_RGBA8, {128, 128, 255, 255});
   return {};
+}
+
+void SceneRenderer::beginLook(const LookProgram& p, const EyeCamera& eye) const {
+  beginMeshes(eye);
+  glUseProgram(p.program);
+  const glm::mat4 view_proj = eye.projection * eye.view;
+  glUniformMatrix4fv(p.view_proj, 1, GL_FALSE, glm::value_ptr(view_proj));
+  glUniform3fv(p.eye, 1, glm::value_ptr(eye.position));
+  glUniform3fv(p.light, 1, glm::value_ptr(keyLight()));
+}
+
+void SceneRenderer::beginLookMeshes(const EyeCamera& eye) const { beginLook(look_program_, eye); }
+
+void SceneRenderer::beginSkinnedLookMeshes(const EyeCamera& eye) const {
+  beginLook(gpu_look_program_, eye);
+}
+
+void SceneRenderer::drawLookParts(const LookProgram& p, const GpuLook& look, const glm::mat4& model,
+                                  const glm::vec3& tint, const GpuMesh* cpu, const GpuSkinMesh* gpu,
+                                  bool with_offsets) const {
+  const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(model)));
+  glUniformMatrix4fv(p.model, 1, GL_FALSE, glm::value_ptr(model));
+  glUniformMatrix3fv(p.normal_matrix, 1, GL_FALSE, glm::value_ptr(normal_matrix));
+  glUniform3fv(p.tint, 1, glm::value_ptr(tint));
+  for (const GpuLook::Part& part : look.parts()) {
+    glUniform4fv(p.base_color, 1, glm::value_ptr(part.base_color));
+    glUniform1i(p.has_normal_map, part.normal_texture != 0 ? 1 : 0);
+    glUniform1f(p.normal_scale, part.normal_scale);
+    glUniform1f(p.alpha_cutoff, part.alpha_cutoff);
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D,
+                  part.normal_texture != 0 ? part.normal_texture : flat_normal_texture_);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, part.base_texture != 0 ? part.base_texture : white_texture_);
+    if (part.double_sided) glDisable(GL_CULL_FACE);
+    if (cpu != nullptr) {
+      cpu->drawRange(part.first_index, part.index_count);
+    } else if (gpu != nullptr) {
+      gpu->drawRange(with_offsets, part.first_index, part.index_count);
+    }
+    if (part.double_sided) glEnable(GL_CULL_FACE);
+  }
+  glBindTexture(GL_TEXTURE_2D, 0);
+}
+
+void SceneRenderer::drawMeshLook(const GpuMesh& mesh, const GpuLook& look, const glm::mat4& model,
+                                 const glm::vec3& tint) const {
+  drawLookParts(look_program_, look, model, tint, &mesh, nullptr, false);
+}
+
+void SceneRenderer::drawSkinnedMeshLook(const GpuSkinMesh& mesh, const GpuLook& look,
+                                        std::span<const DualQuat> skin, const glm::mat4& model,
+                                        const glm::vec3& tint, bool with_offsets) const {
+  const int joints = mesh.jointCount();
+  if (mesh.empty() || joints > kMaxGpuSkinJoints || static_cast<int>(skin.size()) < joints) {
+    return;
+  }
+  glUniform4fv(gpu_look_program_.joints, 2 * joints, &skin[0].real.x);
+  drawLookParts(gpu_look_program_, look, model, tint, nullptr, &mesh, with_offsets);
+}
+
+glm::mat4 SceneRenderer::shadowProjection(float height) {
+  const glm::vec3 l = keyLight();
+  const float kx = l.x / l.y;
+  const float kz = l.z / l.y;
+  glm::mat4 s(1.0f);
+  s[1] = glm::vec4(-kx, 0.0f, -kz, 0.0f);                    // y moves x and z along the light
+  s[3] = glm::vec4(kx * height, height, kz * height, 1.0f);  // and lands on y = height
+  return s;
+}
+
+void SceneRenderer::beginShadow(const ShadowProgram& p, const EyeCamera& eye) const {
+  glViewport(eye.viewport.x, eye.viewport.y, eye.viewport.z, eye.viewport.w);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_FALSE);
+  glDisable(GL_CULL_FACE);
+  // Each pixel darkens once, however many flattened triangles cover it: the stencil
+  // (cleared inside the viewport) marks it on the first.
+  glEnable(GL_SCISSOR_TEST);
+  glScissor(eye.viewport.x, eye.viewport.y, eye.viewport.z, eye.viewport.w);
+  glClearStencil(0);
+  glStencilMask(0xFF);
+  glClear(GL_STENCIL_BUFFER_BIT);
+  glDisable(GL_SCISSOR_TEST);
+  glEnable(GL_STENCIL_TEST);
+  glStencilFunc(GL_EQUAL, 0, 0xFF);
+  glStencilOp(GL_KEEP, GL_KEEP, GL_INCR);
+  glEnable(GL_BLEND);
+  glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+  glUseProgram(p.program);
+  const glm::mat4 view_proj = eye.projection * eye.view;
+  glUniformMatrix4fv(p.view_proj, 1, GL_FALSE, glm::value_ptr(view_proj));
+  glUniform1f(p.alpha, kShadowAlpha);
+}
+
+void SceneRenderer::beginShadows(const EyeCamera& eye) const { beginShadow(shadow_program_, eye); }
+
+void SceneRenderer::beginSkinnedShadows(const EyeCamera& eye) const {
+  beginShadow(gpu_shadow_program_, eye);
+}
+
+void SceneRenderer::drawMeshShadow(const GpuMesh& mesh, const glm::mat4& model) const {
+  const glm::mat4 flat = shadowProjection() * model;
+  glUniformMatrix4fv(shadow_program_.model, 1, GL_FALSE, glm::value_ptr(flat));
+  mesh.draw();
+}
+
+void SceneRenderer::drawSkinnedMeshShadow(const GpuSkinMesh& mesh, std::span<const DualQuat> skin,
+                                          const glm::mat4& model, bool with_offsets) const {
+  const int joints = mesh.jointCount();
+  if (mesh.empty() || joints > kMaxGpuSkinJoints || static_cast<int>(skin.size()) < joints) {
+    return;
+  }
+  const glm::mat4 flat = shadowProjection() * model;
+  glUniformMatrix4fv(gpu_shadow_program_.model, 1, GL_FALSE, glm::value_ptr(flat));
+  glUniform4fv(gpu_shadow_program_.joints, 2 * joints, &skin[0].real.x);
+  mesh.draw(with_offsets);
+}
+
+void SceneRenderer::endShadows() const {
+  glDisable(GL_BLEND);
+  glDisable(GL_STENCIL_TEST);
+  glDepthMask(GL_TRUE);
 }
 
 void SceneRenderer::clearViewport(const glm::ivec4& viewport, bool color, bool depth) const {

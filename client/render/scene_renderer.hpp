@@ -1,6 +1,17 @@
 // Draws the room: a box-filtered checker floor that fades into the background, lit skin
 // (hemisphere ambient + one directional key light + a faint highlight), and marker
 // diamonds. Colours are linear 0..1 RGB written straight to an RGBA8 target.
+//
+// Avatars with a look (materials, textures: GpuLook) are drawn sRGB-correctly: colour
+// textures are sampled from sRGB textures (linear values), factors are linear, lighting
+// is computed in linear light and the result is encoded to sRGB in the fragment shader
+// (the target stays RGBA8, so the plain paths above look as before). Normal maps use a
+// tangent frame from screen-space derivatives (no tangents needed).
+//
+// Shadows: planar projected shadows of the key light (Blinn 1988): each mesh drawn again,
+// flattened onto the floor plane y = 0 along the light, as a translucent dark overlay
+// (the target's stencil makes overlapping triangles and avatars darken a pixel once;
+// the bound framebuffer needs a stencil buffer, as RenderTarget's has).
 #pragma once
 
 #include <span>
@@ -9,6 +20,7 @@
 #include <glm/glm.hpp>
 
 #include "client/render/camera.hpp"
+#include "client/render/gpu_look.hpp"
 #include "client/render/gpu_mesh.hpp"
 #include "client/render/gpu_skin_mesh.hpp"
 #include "common/base/result.hpp"
@@ -54,7 +66,59 @@ class SceneRenderer {
                        const glm::mat4& model, const glm::vec3& color,
                        bool with_offsets = false) const;
 
+  // Textured (look) drawing: beginLookMeshes / beginSkinnedLookMeshes once per eye, then
+  // any number of draws of that kind; the mesh must carry the look's texture
+  // coordinates (attachUvs) when it has any. tint: multiplies the base colour (linear;
+  // white keeps the look as authored). Other draws need their begin call again after.
+  void beginLookMeshes(const EyeCamera& eye) const;
+  void drawMeshLook(const GpuMesh& mesh, const GpuLook& look, const glm::mat4& model,
+                    const glm::vec3& tint) const;
+  void beginSkinnedLookMeshes(const EyeCamera& eye) const;
+  void drawSkinnedMeshLook(const GpuSkinMesh& mesh, const GpuLook& look,
+                           std::span<const DualQuat> skin, const glm::mat4& model,
+                           const glm::vec3& tint, bool with_offsets = false) const;
+
+  // Shadows on the floor (y = 0): after drawFloor and before the meshes, beginShadows (or
+  // beginSkinnedShadows), any number of shadow draws, then endShadows. The draws take the
+  // same arguments as the mesh draws.
+  void beginShadows(const EyeCamera& eye) const;
+  void drawMeshShadow(const GpuMesh& mesh, const glm::mat4& model) const;
+  void beginSkinnedShadows(const EyeCamera& eye) const;
+  void drawSkinnedMeshShadow(const GpuSkinMesh& mesh, std::span<const DualQuat> skin,
+                             const glm::mat4& model, bool with_offsets = false) const;
+  void endShadows() const;
+  // The flattening transform (room -> room): a point moved along the key light onto
+  // y = height. Exposed for tests.
+  static glm::mat4 shadowProjection(float height = kShadowLift);
+  static constexpr float kShadowLift = 0.002f;  // metres above the floor
+  static constexpr float kShadowAlpha = 0.38f;  // darkening of the floor under a shadow
+
  private:
+  struct LookProgram {
+    GLuint program = 0;
+    GLint model = -1, view_proj = -1, normal_matrix = -1, eye = -1, light = -1;
+    GLint base_color = -1, tint = -1, has_normal_map = -1, normal_scale = -1;
+    GLint alpha_cutoff = -1, joints = -1;
+  };
+  struct ShadowProgram {
+    GLuint program = 0;
+    GLint model = -1, view_proj = -1, joints = -1, alpha = -1;
+  };
+  Status initLook();
+  void beginLook(const LookProgram& p, const EyeCamera& eye) const;
+  // Draws each part of `look` from `cpu` (a GpuMesh) or else `gpu` (a GpuSkinMesh).
+  void drawLookParts(const LookProgram& p, const GpuLook& look, const glm::mat4& model,
+                     const glm::vec3& tint, const GpuMesh* cpu, const GpuSkinMesh* gpu,
+                     bool with_offsets) const;
+  void beginShadow(const ShadowProgram& p, const EyeCamera& eye) const;
+
+  LookProgram look_program_;
+  LookProgram gpu_look_program_;
+  ShadowProgram shadow_program_;
+  ShadowProgram gpu_shadow_program_;
+  GLuint white_texture_ = 0;
+  GLuint flat_normal_texture_ = 0;
+
   GLuint skin_program_ = 0;
   GLint skin_model_ = -1;
   GLint skin_view_proj_ = -1;

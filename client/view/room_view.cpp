@@ -81,6 +81,7 @@ struct MemberSlot {
   GpuMesh mesh;
   bool gpu_capable = false;            // gpu_skinning on and the avatar fits it
   GpuSkinMesh gpu_mesh;                // (gpu_capable, not headless)
+  GpuLook look;                        // the avatar's materials and textures (not headless)
   float reach = 0.0f;                  // farthest vertex from its first joint at rest (m): bounds
   std::uint64_t uploaded_offsets = 0;  // generation of the offsets in gpu_mesh (0: none)
 
@@ -241,7 +242,15 @@ void RoomView::Impl::prepareSlot(MemberSlot& slot, const MemberView& member, int
     warning = fmt::format("member {} ('{}'): {}", member.id, member.name, slot.rig.warning);
   }
   slot.head_rest_inverse = glm::inverse(slot.head.rest_model);
-  if (!options.headless) slot.mesh.create(avatar.skin.vertexCount(), avatar.skin.indices);
+  if (!options.headless) {
+    slot.mesh.create(avatar.skin.vertexCount(), avatar.skin.indices);
+    // The look: textures decoded and uploaded once; texture coordinates on the mesh.
+    slot.look.create(avatar.look, avatar.skin.indices.size());
+    if (!avatar.look.empty()) slot.mesh.attachUvs(avatar.look.uvs);
+    if (!slot.look.warning().empty()) {
+      warning = fmt::format("member {} ('{}'): {}", member.id, member.name, slot.look.warning());
+    }
+  }
   // Rigid skinning on the GPU where it fits, and how far the skin reaches from the joints.
   slot.gpu_capable = false;
   slot.uploaded_offsets = 0;
@@ -252,6 +261,7 @@ void RoomView::Impl::prepareSlot(MemberSlot& slot, const MemberView& member, int
       slot.gpu_capable = true;
     } else if (Status st = slot.gpu_mesh.create(avatar.skin, avatar.skeleton.jointCount()); st) {
       slot.gpu_capable = true;
+      if (!avatar.look.empty()) slot.gpu_mesh.attachUvs(avatar.look.uvs);
     } else {
       warning = fmt::format("member {}: {}", member.id, st.error().message);
     }
@@ -583,23 +593,65 @@ void RoomView::Impl::drawFrame() {
     }
     scene->drawFloor(eye, floor_center, floor_extent);
 
-    // Skin, then markers above heads.
+    // Shadows on the floor (the key light's, flattened meshes).
+    if (options.shadows) {
+      scene->beginShadows(eye);
+      for (const auto& slot : slots) {
+        if (!slot->has_front || slot->shown().gpu) continue;
+        scene->drawMeshShadow(slot->mesh, slot->shown().placement);
+      }
+      if (any_gpu) {
+        scene->beginSkinnedShadows(eye);
+        for (const auto& slot : slots) {
+          if (!slot->has_front || !slot->shown().gpu) continue;
+          scene->drawSkinnedMeshShadow(slot->gpu_mesh, slot->shown().dq, slot->shown().placement,
+                                       slot->shown().has_offsets);
+        }
+      }
+      scene->endShadows();
+    }
+
+    // Skin (plain, then with a look: materials and textures, sRGB-correct), then markers
+    // above heads.
     scene->beginMeshes(eye);
+    bool any_look = false;
     for (const auto& slot : slots) {
-      if (!slot->has_front || slot->shown().gpu) continue;
+      if (!slot->has_front) continue;
+      if (!slot->look.empty()) {
+        any_look = true;
+        continue;
+      }
+      if (slot->shown().gpu) continue;
       scene->drawMesh(slot->mesh, slot->shown().placement,
                       tintedSkin(memberColor(static_cast<int>(slot->id))));
     }
     if (any_gpu) {
       scene->beginSkinnedMeshes(eye);
       for (const auto& slot : slots) {
-        if (!slot->has_front || !slot->shown().gpu) continue;
+        if (!slot->has_front || !slot->shown().gpu || !slot->look.empty()) continue;
         scene->drawSkinnedMesh(slot->gpu_mesh, slot->shown().dq, slot->shown().placement,
                                tintedSkin(memberColor(static_cast<int>(slot->id))),
                                slot->shown().has_offsets);
       }
-      scene->beginMeshes(eye);
     }
+    if (any_look) {
+      // A look is drawn as authored (no member tint: the markers and tags tell members apart).
+      const glm::vec3 white(1.0f);
+      scene->beginLookMeshes(eye);
+      for (const auto& slot : slots) {
+        if (!slot->has_front || slot->look.empty() || slot->shown().gpu) continue;
+        scene->drawMeshLook(slot->mesh, slot->look, slot->shown().placement, white);
+      }
+      if (any_gpu) {
+        scene->beginSkinnedLookMeshes(eye);
+        for (const auto& slot : slots) {
+          if (!slot->has_front || slot->look.empty() || !slot->shown().gpu) continue;
+          scene->drawSkinnedMeshLook(slot->gpu_mesh, slot->look, slot->shown().dq,
+                                     slot->shown().placement, white, slot->shown().has_offsets);
+        }
+      }
+    }
+    scene->beginMeshes(eye);
     if (!options.show_tags) continue;
     for (const auto& slot : slots) {
       if (!slot->has_front || (first_person && slot->shown().is_self)) continue;

@@ -125,6 +125,7 @@ struct ViewOptions {
   float vertical_fov_deg = 50.0f;  // camera field of view (vertical, degrees)
   bool vsync = true;               // window only
   bool show_tags = true;           // markers and name tags above heads
+  bool shadows = true;             // planar shadows of the avatars on the floor (key light)
   bool headless = false;           // no GL: render() skins, deforms and places cameras only
   // Rigid skinning in the vertex shader for members that need no CPU vertices this frame
   // (no deformer, or one whose needsVertices() is false, or whose offsetsOnly() gives the

@@ -1,5 +1,6 @@
 #include "common/avatar/avatar_io.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
@@ -131,6 +132,103 @@ Result<SkinMesh> decodeSkin(std::span<const std::uint8_t> payload, int joint_cou
   return m;
 }
 
+// The look (avatar_look.hpp): uvs, textures, materials, submeshes.
+std::vector<std::uint8_t> encodeLook(const AvatarLook& look) {
+  std::vector<std::uint8_t> out;
+  ByteWriter w(out);
+  w.u32(static_cast<std::uint32_t>(look.uvs.size()));
+  w.array(std::span<const glm::vec2>(look.uvs));
+  w.u32(static_cast<std::uint32_t>(look.textures.size()));
+  for (const AvatarTexture& t : look.textures) {
+    w.string(t.name);
+    w.string(t.mime);
+    w.u32(static_cast<std::uint32_t>(t.width));
+    w.u32(static_cast<std::uint32_t>(t.height));
+    w.u32(static_cast<std::uint32_t>(t.encoded.size()));
+    w.raw(t.encoded.data(), t.encoded.size());
+  }
+  w.u32(static_cast<std::uint32_t>(look.materials.size()));
+  for (const AvatarMaterial& m : look.materials) {
+    w.string(m.name);
+    for (int c = 0; c < 4; ++c) w.f32(m.base_color[c]);
+    w.i32(m.base_color_texture);
+    w.i32(m.normal_texture);
+    w.f32(m.normal_scale);
+    w.f32(m.metallic);
+    w.f32(m.roughness);
+    w.u8(static_cast<std::uint8_t>(m.alpha_mode));
+    w.f32(m.alpha_cutoff);
+    w.u8(m.double_sided ? 1 : 0);
+  }
+  w.u32(static_cast<std::uint32_t>(look.submeshes.size()));
+  for (const AvatarSubmesh& sm : look.submeshes) {
+    w.u32(sm.first_index);
+    w.u32(sm.index_count);
+    w.i32(sm.material);
+  }
+  return out;
+}
+
+Result<AvatarLook> decodeLook(std::span<const std::uint8_t> payload, const SkinMesh& skin) {
+  ByteReader r(payload);
+  AvatarLook look;
+  const std::uint32_t nuv = r.u32();
+  if (!r.ok() || (nuv != 0 && nuv != skin.positions.size())) {
+    return fail("{} texture coordinates for {} vertices", nuv, skin.positions.size());
+  }
+  r.array(look.uvs, nuv);
+  const std::uint32_t ntex = r.u32();
+  if (!r.ok() || ntex > static_cast<std::uint32_t>(kMaxLookTextures)) {
+    return fail("truncated, or {} textures (at most {})", ntex, kMaxLookTextures);
+  }
+  look.textures.resize(ntex);
+  for (AvatarTexture& t : look.textures) {
+    t.name = r.string(kMaxLookNameBytes);
+    t.mime = r.string(64);
+    t.width = static_cast<int>(std::min<std::uint32_t>(r.u32(), 1u << 30));
+    t.height = static_cast<int>(std::min<std::uint32_t>(r.u32(), 1u << 30));
+    const std::uint32_t size = r.u32();
+    if (!r.ok() || size > kMaxTextureBytes) return fail("truncated texture, or {} bytes", size);
+    r.array(t.encoded, size);
+    if (!r.ok()) return fail("texture '{}': truncated at byte {}", t.name, r.offset());
+  }
+  const std::uint32_t nmat = r.u32();
+  if (!r.ok() || nmat > static_cast<std::uint32_t>(kMaxLookMaterials)) {
+    return fail("truncated, or {} materials (at most {})", nmat, kMaxLookMaterials);
+  }
+  look.materials.resize(nmat);
+  for (AvatarMaterial& m : look.materials) {
+    m.name = r.string(kMaxLookNameBytes);
+    for (int c = 0; c < 4; ++c) m.base_color[c] = r.f32();
+    m.base_color_texture = r.i32();
+    m.normal_texture = r.i32();
+    m.normal_scale = r.f32();
+    m.metallic = r.f32();
+    m.roughness = r.f32();
+    const std::uint8_t mode = r.u8();
+    if (mode > 2) return fail("material '{}': unknown alpha mode {}", m.name, mode);
+    m.alpha_mode = static_cast<AlphaMode>(mode);
+    m.alpha_cutoff = r.f32();
+    m.double_sided = r.u8() != 0;
+  }
+  const std::uint32_t nsub = r.u32();
+  if (!r.ok() || nsub > skin.indices.size() / 3) {
+    return fail("truncated, or {} submeshes for {} triangles", nsub, skin.indices.size() / 3);
+  }
+  look.submeshes.resize(nsub);
+  for (AvatarSubmesh& sm : look.submeshes) {
+    sm.first_index = r.u32();
+    sm.index_count = r.u32();
+    sm.material = r.i32();
+  }
+  if (!r.ok()) return fail("truncated at byte {}", r.offset());
+  if (r.remaining() != 0) return fail("{} unexpected bytes after the submeshes", r.remaining());
+  if (Status v = validateLook(look, skin.positions.size(), skin.indices.size()); !v) {
+    return v.error();
+  }
+  return look;
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> encodeAvatar(const AvatarModel& avatar) {
@@ -141,7 +239,8 @@ std::vector<std::uint8_t> encodeAvatar(const AvatarModel& avatar) {
   ByteWriter w(out);
   w.raw(kMagic, sizeof kMagic);
   w.u32(kAvatarFormatVersion);
-  w.u32(avatar.implicit ? 6 : 3);
+  const bool has_look = !avatar.look.empty() || !avatar.look.submeshes.empty();
+  w.u32((avatar.implicit ? 6 : 3) + (has_look ? 1 : 0));
   writeChunk(w, "META", meta);
   writeChunk(w, "SKEL", encodeSkeleton(avatar.skeleton));
   writeChunk(w, "SKIN", encodeSkin(avatar.skin));
@@ -156,6 +255,7 @@ std::vector<std::uint8_t> encodeAvatar(const AvatarModel& avatar) {
     writeChunk(w, "GRPH", graph);
     writeChunk(w, "CALB", calib);
   }
+  if (has_look) writeChunk(w, "LOOK", encodeLook(avatar.look));
   return out;
 }
 
@@ -168,9 +268,9 @@ Result<AvatarModel> decodeAvatar(std::span<const std::uint8_t> bytes, std::strin
   const std::uint32_t version = r.u32();
   const std::uint32_t chunks = r.u32();
   if (!r.ok()) return fail("{}: truncated header", source);
-  if (version != kAvatarFormatVersion) {
-    return fail("{}: format version {} (this build reads version {})", source, version,
-                kAvatarFormatVersion);
+  if (version < kAvatarOldestFormatVersion || version > kAvatarFormatVersion) {
+    return fail("{}: format version {} (this build reads versions {} to {})", source, version,
+                kAvatarOldestFormatVersion, kAvatarFormatVersion);
   }
   if (chunks > kMaxChunks) return fail("{}: {} chunks is beyond the limit", source, chunks);
 
@@ -178,6 +278,7 @@ Result<AvatarModel> decodeAvatar(std::span<const std::uint8_t> bytes, std::strin
   bool have_meta = false, have_skel = false, have_skin = false;
   std::span<const std::uint8_t> skin_payload;
   std::optional<std::span<const std::uint8_t>> prim_payload, graph_payload, calib_payload;
+  std::optional<std::span<const std::uint8_t>> look_payload;
   for (std::uint32_t c = 0; c < chunks; ++c) {
     // Read and check one chunk.
     const std::size_t at = r.offset();
@@ -216,6 +317,8 @@ Result<AvatarModel> decodeAvatar(std::span<const std::uint8_t> bytes, std::strin
       graph_payload = payload;
     } else if (name == "CALB") {
       calib_payload = payload;
+    } else if (name == "LOOK" && version >= 2) {
+      look_payload = payload;
     }
   }
   if (r.remaining() != 0) return fail("{}: {} bytes after the last chunk", source, r.remaining());
@@ -226,6 +329,11 @@ Result<AvatarModel> decodeAvatar(std::span<const std::uint8_t> bytes, std::strin
   auto skin = decodeSkin(skin_payload, avatar.skeleton.jointCount());
   if (!skin) return fail("{}: chunk 'SKIN': {}", source, skin.error().message);
   avatar.skin = std::move(*skin);
+  if (look_payload) {
+    auto look = decodeLook(*look_payload, avatar.skin);
+    if (!look) return fail("{}: chunk 'LOOK': {}", source, look.error().message);
+    avatar.look = std::move(*look);
+  }
 
   // The deformable component: all three chunks or none.
   const int present = (prim_payload ? 1 : 0) + (graph_payload ? 1 : 0) + (calib_payload ? 1 : 0);

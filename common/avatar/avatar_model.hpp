@@ -7,6 +7,7 @@
 
 #include "common/anim/skeleton.hpp"
 #include "common/anim/skin_mesh.hpp"
+#include "common/avatar/avatar_look.hpp"
 #include "common/base/result.hpp"
 #include "common/deform/implicit_model.hpp"
 
@@ -19,9 +20,12 @@ struct AvatarModel {
   // The deformable component (primitives, combination graph, calibration), fitted by
   // `vistel-avatar build`; empty = the avatar is drawn with the rigid component only.
   std::optional<ImplicitModel> implicit;
+  // Texture coordinates, materials and textures of the skin (avatar_look.hpp); empty =
+  // drawn in the renderer's plain skin colour.
+  AvatarLook look;
 };
 
-// Validates skeleton, skin and implicit model together (the message names the part and
+// Validates skeleton, skin, implicit model and look together (the message names the part and
 // the element).
 Status validateAvatar(const AvatarModel& avatar);
 

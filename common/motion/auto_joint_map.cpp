@@ -683,6 +683,78 @@ Result<JointMapChoice> chooseJointMap(std::span<const JointMap> maps, const Skel
   return fail("{}\nand {}", inferred.error().message, selected.error().message);
 }
 
+Result<JointMapChoice> explicitJointMap(const JointMap& explicit_map, const Skeleton& skeleton) {
+  if (Status st = validateSkeleton(skeleton); !st) return st.error();
+  if (explicit_map.canonical.size() != explicit_map.joint.size()) {
+    return fail("joint map '{}': {} canonical names for {} joints", explicit_map.name,
+                explicit_map.canonical.size(), explicit_map.joint.size());
+  }
+  const std::size_t njoint = skeleton.names.size();
+  std::vector<int> joint_of(kCanonicalCount, -1);
+  std::vector<std::string> origin_of(kCanonicalCount);
+  std::set<int> used;
+  for (std::size_t e = 0; e < explicit_map.canonical.size(); ++e) {
+    const int c = canonicalIndex(explicit_map.canonical[e]);
+    if (c < 0) {
+      return fail("joint map '{}': '{}' is not a canonical joint", explicit_map.name,
+                  explicit_map.canonical[e]);
+    }
+    int j = -1;
+    for (std::size_t k = 0; k < njoint; ++k) {
+      if (skeleton.names[k] == explicit_map.joint[e]) j = static_cast<int>(k);
+    }
+    if (j < 0) {
+      return fail("joint map '{}': {} is '{}', which the skeleton does not have", explicit_map.name,
+                  explicit_map.canonical[e], explicit_map.joint[e]);
+    }
+    if (joint_of[static_cast<std::size_t>(c)] >= 0 || !used.insert(j).second) {
+      return fail("joint map '{}': {} or joint '{}' is named twice", explicit_map.name,
+                  explicit_map.canonical[e], explicit_map.joint[e]);
+    }
+    joint_of[static_cast<std::size_t>(c)] = j;
+    origin_of[static_cast<std::size_t>(c)] = explicit_map.name;
+  }
+  JointMapChoice choice;
+  // What the explicit map leaves out, inferred (with joints it did not take).
+  if (Result<JointMapChoice> inferred = inferJointMap(skeleton); inferred) {
+    for (std::size_t e = 0; e < inferred->map.canonical.size(); ++e) {
+      const auto c = static_cast<std::size_t>(canonicalIndex(inferred->map.canonical[e]));
+      if (joint_of[c] >= 0) continue;
+      int j = -1;
+      for (std::size_t k = 0; k < njoint; ++k) {
+        if (skeleton.names[k] == inferred->map.joint[e]) j = static_cast<int>(k);
+      }
+      if (j < 0 || !used.insert(j).second) continue;
+      joint_of[c] = j;
+      origin_of[c] = inferred->origin[e];
+    }
+    choice.notes = inferred->notes;
+  }
+  choice.inferred = false;
+  choice.map.name = explicit_map.name;
+  choice.map.source = explicit_map.source;
+  choice.map.required = explicit_map.required;
+  if (choice.map.required.empty()) {
+    for (std::string_view r : kDefaultRequiredJoints) choice.map.required.emplace_back(r);
+  }
+  const auto canonical = canonicalJoints();
+  for (std::size_t c = 0; c < kCanonicalCount; ++c) {
+    if (joint_of[c] < 0) continue;
+    choice.map.canonical.emplace_back(canonical[c]);
+    choice.map.joint.push_back(skeleton.names[static_cast<std::size_t>(joint_of[c])]);
+    choice.origin.push_back(origin_of[c]);
+  }
+  std::vector<std::string> missing;
+  for (const std::string& r : choice.map.required) {
+    if (choice.map.jointFor(r).empty()) missing.push_back(r);
+  }
+  if (!missing.empty()) {
+    return fail("joint map '{}': required joint(s) {} neither mapped nor inferred",
+                explicit_map.name, fmt::join(missing, ", "));
+  }
+  return choice;
+}
+
 std::string describeJointMapChoice(const JointMapChoice& choice) {
   std::string out = fmt::format("map: {} ({})\n", choice.map.name, choice.map.source);
   for (std::size_t i = 0; i < choice.map.canonical.size(); ++i) {

@@ -55,6 +55,14 @@ Result<JointMapChoice> inferJointMap(const Skeleton& skeleton);
 // inferred one; the error lists both the config candidates and what inference missed.
 Result<JointMapChoice> chooseJointMap(std::span<const JointMap> maps, const Skeleton& skeleton);
 
+// An explicit map (e.g. a VRM file's humanoid bones, GltfImportReport::humanoid) made
+// complete: its entries are kept as they are (origin: the map's name), the canonical
+// joints it leaves out are filled from inferJointMap where inference finds joints the map
+// did not take. Fails when an entry names a joint the skeleton lacks or a canonical name
+// that does not exist, when a joint is used twice, or when a required joint (the map's,
+// else kDefaultRequiredJoints) is still missing. Cost: as inferJointMap.
+Result<JointMapChoice> explicitJointMap(const JointMap& explicit_map, const Skeleton& skeleton);
+
 // Human-readable lines: "map: <name> (<source>)" then "  canonical <- joint  [origin]".
 std::string describeJointMapChoice(const JointMapChoice& choice);
 

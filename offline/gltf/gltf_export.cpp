@@ -161,6 +161,9 @@ Status checkScene(const GltfScene& scene) {
       if (!(sum > 0.0f)) return fail("vertex {} has no weight", v);
     }
   }
+  if (Status s = validateLook(scene.look, n, mesh.indices.size()); !s) {
+    return withContext("look", s.error());
+  }
   if (!scene.frames.empty()) {
     if (!(scene.frame_time > 0.0) || !std::isfinite(scene.frame_time)) {
       return fail("frame time {} must be positive", scene.frame_time);
@@ -237,6 +240,51 @@ void appendMatrix(const glm::mat4& m, std::vector<float>& out) {
   }
 }
 
+// Materials, and the textures and images they use (each image's bytes as a buffer view).
+// Without texture coordinates, textures are left out (a textured primitive needs
+// TEXCOORD_0).
+Status addLook(const AvatarLook& look, GlbBuilder& b, json& materials, json& textures,
+               json& images) {
+  const bool with_uvs = !look.uvs.empty();
+  std::vector<int> texture_of(look.textures.size(), -1);
+  auto textureIndex = [&](int t) {
+    auto& slot = texture_of[static_cast<std::size_t>(t)];
+    if (slot >= 0) return slot;
+    const AvatarTexture& tex = look.textures[static_cast<std::size_t>(t)];
+    const int view = b.addView(tex.encoded.data(), tex.encoded.size(), 0);
+    json image = {{"bufferView", view}, {"mimeType", tex.mime}};
+    if (!tex.name.empty()) image["name"] = tex.name;
+    images.push_back(std::move(image));
+    textures.push_back({{"sampler", 0}, {"source", images.size() - 1}});
+    slot = static_cast<int>(textures.size()) - 1;
+    return slot;
+  };
+  for (const AvatarMaterial& m : look.materials) {
+    json pbr = {
+        {"baseColorFactor", {m.base_color.r, m.base_color.g, m.base_color.b, m.base_color.a}},
+        {"metallicFactor", m.metallic},
+        {"roughnessFactor", m.roughness}};
+    json mat = json::object();
+    if (!m.name.empty()) mat["name"] = m.name;
+    if (with_uvs && m.base_color_texture >= 0) {
+      pbr["baseColorTexture"] = {{"index", textureIndex(m.base_color_texture)}};
+    }
+    mat["pbrMetallicRoughness"] = std::move(pbr);
+    if (with_uvs && m.normal_texture >= 0) {
+      mat["normalTexture"] = {{"index", textureIndex(m.normal_texture)}, {"scale", m.normal_scale}};
+    }
+    if (m.alpha_mode == AlphaMode::kMask) {
+      mat["alphaMode"] = "MASK";
+      mat["alphaCutoff"] = m.alpha_cutoff;
+    } else if (m.alpha_mode == AlphaMode::kBlend) {
+      mat["alphaMode"] = "BLEND";
+    }
+    if (m.double_sided) mat["doubleSided"] = true;
+    materials.push_back(std::move(mat));
+  }
+  return {};
+}
+
 }  // namespace
 
 Result<std::vector<std::uint8_t>> encodeGlb(const GltfScene& scene) {
@@ -255,7 +303,13 @@ Result<std::vector<std::uint8_t>> encodeGlb(const GltfScene& scene) {
     for (std::size_t v = 0; v < nvert; ++v) base_normals[v] = unitOrUp(mesh.normals[v]);
     attributes["NORMAL"] = b.addVec3s(base_normals, kArrayBuffer, true);
   }
-  primitive["indices"] = b.addIndices(mesh.indices);
+  const bool with_uvs = !scene.look.uvs.empty();
+  if (with_uvs) {
+    attributes["TEXCOORD_0"] =
+        b.addFloats(std::span<const float>(reinterpret_cast<const float*>(scene.look.uvs.data()),
+                                           scene.look.uvs.size() * 2),
+                    2, "VEC2", kArrayBuffer, false);
+  }
 
   json nodes = json::array();
   json mesh_node = {{"name", mesh.name}, {"mesh", 0}};
@@ -364,7 +418,20 @@ Result<std::vector<std::uint8_t>> encodeGlb(const GltfScene& scene) {
          {"channels",
           json::array({{{"sampler", 0}, {"target", {{"node", 0}, {"path", "weights"}}}}})}});
   }
-  mesh_json["primitives"] = json::array({primitive});
+  // One primitive per submesh (the attributes and targets shared), with its material.
+  json primitives = json::array();
+  for (const AvatarSubmesh& sm : effectiveSubmeshes(scene.look, mesh.indices.size())) {
+    json prim = primitive;
+    prim["indices"] = b.addIndices(
+        std::span<const std::uint32_t>(mesh.indices).subspan(sm.first_index, sm.index_count));
+    if (sm.material >= 0) prim["material"] = sm.material;
+    primitives.push_back(std::move(prim));
+  }
+  mesh_json["primitives"] = std::move(primitives);
+  json materials = json::array();
+  json textures = json::array();
+  json images = json::array();
+  if (Status s = addLook(scene.look, b, materials, textures, images); !s) return s.error();
 
   // The document.
   nodes.insert(nodes.begin(), mesh_node);
@@ -381,6 +448,14 @@ Result<std::vector<std::uint8_t>> encodeGlb(const GltfScene& scene) {
               {"bufferViews", b.views()},
               {"buffers", json::array({{{"byteLength", b.bin().size()}}})}};
   if (!skins.empty()) doc["skins"] = skins;
+  if (!materials.empty()) doc["materials"] = materials;
+  if (!textures.empty()) {
+    doc["textures"] = textures;
+    doc["images"] = images;
+    // Linear magnification, trilinear minification, repeat (glTF's defaults, said).
+    doc["samplers"] = json::array(
+        {{{"magFilter", 9729}, {"minFilter", 9987}, {"wrapS", 10497}, {"wrapT", 10497}}});
+  }
   if (!animations.empty()) doc["animations"] = animations;
   return assembleGlb(doc.dump(), b.bin());
 }
@@ -411,6 +486,7 @@ GltfScene posedAvatarScene(const AvatarModel& avatar, std::span<const glm::mat4>
   scene.mesh.normals.assign(normals.begin(), normals.end());
   scene.mesh.indices = avatar.skin.indices;
   scene.skin = gltfSkinFromAvatar(avatar, joint_model);
+  scene.look = avatar.look;
   return scene;
 }
 

@@ -1,6 +1,7 @@
-// glTF 2.0 binary (.glb) export of a mesh, optionally skinned, optionally with a vertex
-// animation (all frames in one file), written so that the Khronos glTF validator reports
-// no errors (accessor min/max exact, unit normals, normalised weights, aligned views).
+// glTF 2.0 binary (.glb) export of a mesh, optionally skinned, optionally textured
+// (materials, PNG/JPEG textures embedded), optionally with a vertex animation (all frames in one
+// file), written so that the Khronos glTF validator reports no errors (accessor min/max exact, unit
+// normals, normalised weights, aligned views).
 //
 // Layout: node 0 is the mesh node (a scene root); joints follow as nodes 1..njoint in
 // skeleton order, in the posture given. A vertex animation is one morph target per frame
@@ -60,6 +61,10 @@ struct GltfScene {
   std::vector<GltfFrame> frames;   // empty: no animation
   double frame_time = 1.0 / 30.0;  // seconds per frame (> 0)
   std::string generator = "vistel";
+  // Texture coordinates (nvert or none), materials and textures (embedded in the .glb as
+  // buffer views), one glTF primitive per submesh; empty: one primitive, no material.
+  // Without texture coordinates, materials are written without their textures.
+  AvatarLook look;
 };
 
 // The .glb bytes of a scene. Fails (naming the part and the element) on inconsistent
@@ -75,8 +80,9 @@ Status writeGlb(const std::string& path, const GltfScene& scene);
 GltfSkin gltfSkinFromAvatar(const AvatarModel& avatar, std::span<const glm::mat4> joint_model);
 
 // A rigged avatar whose bind posture is the given one: mesh = the posed vertices
-// (positions, normals: nvert each, e.g. from skinMesh), skeleton = joint_model. Importing
-// the file gives these vertex positions and the avatar's joint names and weights.
+// (positions, normals: nvert each, e.g. from skinMesh), skeleton = joint_model, look = the
+// avatar's (texture coordinates, materials, textures). Importing the file gives these
+// vertex positions, the avatar's joint names and weights, and its look.
 GltfScene posedAvatarScene(const AvatarModel& avatar, std::span<const glm::mat4> joint_model,
                            std::span<const glm::vec3> positions,
                            std::span<const glm::vec3> normals);

@@ -6,12 +6,15 @@
 #include <map>
 #include <unordered_set>
 
+#include <fmt/ranges.h>
 #include <glm/gtc/quaternion.hpp>
 
 #include "common/base/file.hpp"
 #include "offline/gltf/gltf_accessor.hpp"
 #include "offline/gltf/gltf_load.hpp"
+#include "offline/gltf/gltf_look.hpp"
 #include "offline/gltf/gltf_nodes.hpp"
+#include "offline/gltf/gltf_vrm.hpp"
 #include "offline/gltf/skin_trimesh.hpp"
 
 namespace vistel {
@@ -33,6 +36,9 @@ struct RawMesh {
   std::vector<glm::dvec3> normals;                 // (nvert), zero where the file has none
   std::vector<std::uint32_t> indices;              // (3 * ntri)
   std::vector<std::vector<Influence>> influences;  // non-zero influences per vertex (nvert)
+  std::vector<glm::vec2> uvs;                      // TEXCOORD_0 (nvert), zero where none
+  int vertices_without_uvs = 0;                    // in primitives that have no TEXCOORD_0
+  std::vector<GltfPrimitiveRun> runs;              // triangles per primitive, in index order
   int negative_weights = 0;
 };
 
@@ -115,6 +121,7 @@ class Importer {
   void buildSkeleton(Skeleton& skeleton);
   Status buildSkin(SkinMesh& skin, const Skeleton& skeleton);
   void finishWithOpenMesh(SkinMesh& skin);
+  void applyVrm(AvatarModel& avatar);
   void warn(std::string text) { report_.warnings.push_back(fmt::format("{}: {}", source_, text)); }
 
   const tinygltf::Model& model_;
@@ -134,7 +141,64 @@ class Importer {
   std::vector<int> skeleton_of_skin_;   // skeleton joint per skin joint (nskin)
   std::vector<Rigid> joint_model_;      // rigid model frame per skeleton joint (njoint)
   bool flipped_ = false;                // bind transform mirrors: winding reversed
+  VrmHumanoid vrm_;                     // the VRM humanoid (empty version: not a VRM)
 };
+
+// Rotates a whole avatar half a turn about +Y (model space): vertices, normals and the
+// root joint's rest frame; the other joints' frames are relative and stay.
+void turnAvatarAround(AvatarModel& avatar) {
+  const glm::quat half(0.0f, 0.0f, 1.0f, 0.0f);  // w, x, y, z: 180 degrees about +Y
+  for (glm::vec3& p : avatar.skin.positions) p = glm::vec3(-p.x, p.y, -p.z);
+  for (glm::vec3& n : avatar.skin.normals) n = glm::vec3(-n.x, n.y, -n.z);
+  Transform& root = avatar.skeleton.rest_local[0];
+  root.translation = glm::vec3(-root.translation.x, root.translation.y, -root.translation.z);
+  root.rotation = glm::quat(canonical(glm::normalize(half * root.rotation)));
+  computeInverseBind(avatar.skeleton);
+}
+
+// The VRM humanoid as a joint map (canonical <- imported joint name); with
+// vrm_canonical_names the joints are renamed to their canonical names (a joint outside
+// the humanoid that already has such a name gets a "_vrm" suffix). VRM 0.x models face
+// -Z: they are turned to face +Z like every vistel avatar.
+void Importer::applyVrm(AvatarModel& avatar) {
+  report_.vrm_version = vrm_.version;
+  Skeleton& skeleton = avatar.skeleton;
+  JointMap map;
+  map.name = "vrm-humanoid";
+  map.source = source_;
+  map.required.assign(std::begin(kDefaultRequiredJoints), std::end(kDefaultRequiredJoints));
+  std::vector<int> joints;
+  for (const auto& [canonical, node] : vrm_.bones) {
+    const int k = skin_joint_of_node_[static_cast<std::size_t>(node)];
+    if (k < 0) {
+      warn(fmt::format("VRM bone {} is node {} ('{}'), which is not a joint of skin {}; left out",
+                       canonical, node, nameOf(graph_, node), skin_index_));
+      continue;
+    }
+    const int j = skeleton_of_skin_[static_cast<std::size_t>(k)];
+    map.canonical.push_back(canonical);
+    map.joint.push_back(skeleton.names[static_cast<std::size_t>(j)]);
+    joints.push_back(j);
+  }
+  if (!vrm_.ignored.empty()) {
+    warn(fmt::format("VRM bones with no vistel joint, left to the skin: {}",
+                     fmt::join(vrm_.ignored, ", ")));
+  }
+  if (options_.vrm_canonical_names) {
+    std::vector<bool> mapped(skeleton.names.size(), false);
+    for (int j : joints) mapped[static_cast<std::size_t>(j)] = true;
+    for (std::size_t j = 0; j < skeleton.names.size(); ++j) {
+      if (!mapped[j] && canonicalIndex(skeleton.names[j]) >= 0) skeleton.names[j] += "_vrm";
+    }
+    for (std::size_t e = 0; e < joints.size(); ++e) {
+      skeleton.names[static_cast<std::size_t>(joints[e])] = map.canonical[e];
+      map.joint[e] = map.canonical[e];
+    }
+    uniquify(skeleton.names, report_.warnings, source_);
+  }
+  report_.humanoid = std::move(map);
+  if (vrm_.version == "0.x") turnAvatarAround(avatar);
+}
 
 // Picks the first node (scene order, then node order) with both a mesh and a skin.
 Status Importer::pickSkin() {
@@ -318,10 +382,27 @@ Status Importer::readPrimitive(
       }
     }
     if (Status s = readInfluences(prim, where, first, count); !s) return s;
+    raw_.uvs.resize(first + static_cast<std::size_t>(count), glm::vec2(0.0f));
+    if (auto uv_it = prim.attributes.find("TEXCOORD_0"); uv_it != prim.attributes.end()) {
+      Result<AccessorData> uv =
+          readAccessor(model_, uv_it->second, source_,
+                       {"VEC2", {kGltfFloat, -kGltfUnsignedByte, -kGltfUnsignedShort}});
+      if (!uv) return uv.error();
+      if (uv->count != count) {
+        return fail("{}: TEXCOORD_0 has {} elements for {} vertices", where, uv->count, count);
+      }
+      for (std::size_t v = 0; v < static_cast<std::size_t>(count); ++v) {
+        raw_.uvs[first + v] = glm::vec2(static_cast<float>(uv->values[2 * v]),
+                                        static_cast<float>(uv->values[2 * v + 1]));
+      }
+    } else {
+      raw_.vertices_without_uvs += count;
+    }
     bases.emplace(prim.attributes, std::make_pair(base, count));
   }
 
   // Triangles (indices in range, or consecutive vertices when there are none).
+  const std::size_t first_index = raw_.indices.size();
   if (prim.indices >= 0) {
     Result<AccessorData> idx =
         readAccessor(model_, prim.indices, source_,
@@ -344,6 +425,11 @@ Status Importer::readPrimitive(
       return fail("{}: {} vertices without indices is not a multiple of 3", where, count);
     }
     for (int v = 0; v < count; ++v) raw_.indices.push_back(base + static_cast<std::uint32_t>(v));
+  }
+  if (raw_.indices.size() > first_index) {
+    raw_.runs.push_back({static_cast<std::uint32_t>(first_index),
+                         static_cast<std::uint32_t>(raw_.indices.size() - first_index),
+                         prim.material});
   }
   ++report_.primitives;
   return {};
@@ -651,6 +737,9 @@ Result<AvatarModel> Importer::run() {
   graph_ = std::move(*graph);
   if (Status s = pickSkin(); !s) return s.error();
   if (Status s = readSkin(); !s) return s.error();
+  Result<VrmHumanoid> vrm = readVrmHumanoid(model_, source_);
+  if (!vrm) return vrm.error();
+  vrm_ = std::move(*vrm);
 
   // Every primitive of every mesh node that uses the skin (the picked node first).
   std::vector<int> nodes{mesh_node_};
@@ -685,7 +774,29 @@ Result<AvatarModel> Importer::run() {
   buildSkeleton(avatar.skeleton);
   if (Status s = buildSkin(avatar.skin, avatar.skeleton); !s) return s.error();
   finishWithOpenMesh(avatar.skin);
+  if (!vrm_.version.empty()) applyVrm(avatar);
+  // The look: texture coordinates, materials and their textures.
+  if (raw_.vertices_without_uvs == static_cast<int>(raw_.uvs.size())) raw_.uvs.clear();
+  if (!raw_.uvs.empty() && raw_.vertices_without_uvs > 0) {
+    warn(fmt::format("{} of {} vertices have no TEXCOORD_0; they sample the texture at (0, 0)",
+                     raw_.vertices_without_uvs, raw_.uvs.size()));
+  }
+  Result<AvatarLook> look =
+      importGltfLook(model_, source_, raw_.runs, std::move(raw_.uvs), options_, report_.warnings);
+  if (!look) return look.error();
+  avatar.look = std::move(*look);
+  report_.materials = static_cast<int>(avatar.look.materials.size());
+  report_.textures = static_cast<int>(avatar.look.textures.size());
   if (Status s = validateAvatar(avatar); !s) return withContext(source_, s.error());
+  if (options_.max_avatar_bytes > 0) {
+    const std::size_t allowance = implicitModelAllowance(avatar.skin.positions.size());
+    const std::size_t target = options_.max_avatar_bytes > 2 * allowance
+                                   ? options_.max_avatar_bytes - allowance
+                                   : options_.max_avatar_bytes;
+    Result<int> fitted = fitAvatarTextures(avatar, target, report_.warnings);
+    if (!fitted) return withContext(source_, fitted.error());
+    report_.textures_downscaled = *fitted;
+  }
   return avatar;
 }
 

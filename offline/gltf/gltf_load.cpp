@@ -24,9 +24,17 @@ std::string oneLine(std::string text) {
   return out;
 }
 
-// Images are never needed for an avatar's geometry: accept them undecoded.
-bool skipImage(tinygltf::Image*, const int, std::string*, std::string*, int, int,
-               const unsigned char*, int, void*) {
+// Images stay encoded. Those from data URIs and external files are kept as their bytes
+// (image->image, as_is; at most the external-file cap); those in buffer views are left
+// for the caller to read, range-checked, from the buffer view (tinygltf hands this
+// callback a pointer it has not checked against the buffer's size).
+bool keepImageBytes(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                    const unsigned char* bytes, int size, void* user) {
+  const std::size_t max_bytes = *static_cast<const std::size_t*>(user);
+  if (image == nullptr || image->bufferView >= 0 || bytes == nullptr || size <= 0) return true;
+  if (static_cast<std::size_t>(size) > max_bytes) return true;
+  image->image.assign(bytes, bytes + size);
+  image->as_is = true;
   return true;
 }
 
@@ -80,7 +88,7 @@ Result<tinygltf::Model> loadGltfModel(std::span<const std::uint8_t> bytes, std::
 
   tinygltf::TinyGLTF loader;
   std::size_t cap = max_external_bytes;
-  loader.SetImageLoader(&skipImage, nullptr);
+  loader.SetImageLoader(&keepImageBytes, &cap);
   loader.SetFsCallbacks(
       tinygltf::FsCallbacks{&fileExists, &expandPath, &readWholeFile, &refuseWrite, &cap});
   tinygltf::Model model;

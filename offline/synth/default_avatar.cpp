@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "offline/synth/body_plan.hpp"
+#include "offline/synth/default_look.hpp"
 #include "offline/synth/implicit_body.hpp"
 #include "offline/synth/polygonize.hpp"
 #include "offline/synth/relax.hpp"
@@ -129,6 +130,7 @@ Result<AvatarModel> makeDefaultAvatar(const DefaultAvatarOptions& options) {
   skin.influences = weights->influences;
   skin.joints = std::move(weights->joints);
   skin.weights = std::move(weights->weights);
+  avatar.look = makeDefaultLook(avatar);  // clothes and skin, a texture drawn by code
 
   if (Status s = validateAvatar(avatar); !s) return withContext("default avatar", s.error());
   return avatar;

@@ -14,7 +14,8 @@
 //     fingers, nose, ears, toes), placed by quadric error, down to the target count;
 //  5. relax: edge flips, tangential smoothing and projection back onto the field (OpenMesh);
 //  6. skin_weights: bone heat diffused over the mesh, each vertex limited to bones along
-//     its own branch of the skeleton, at most 4, normalised.
+//     its own branch of the skeleton, at most 4, normalised;
+//  7. default_look: a material and a texture drawn by code (clothes and skin by region).
 // The result is deterministic: the same bytes on every run (single-threaded, no iteration
 // over unordered containers).
 #pragma once

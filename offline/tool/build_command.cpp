@@ -24,6 +24,8 @@
 #include "common/motion/auto_joint_map.hpp"
 #include "common/motion/joint_map.hpp"
 #include "offline/build/build_model.hpp"
+#include "offline/build/server_limits.hpp"
+#include "offline/gltf/gltf_look.hpp"
 #include "offline/tool/tool_commands.hpp"
 
 namespace vistel {
@@ -135,6 +137,11 @@ Status runBuild(const BuildCommandOptions& opt) {
       &report);
   if (!built) return built;
 
+  // Textures downscaled when the avatar would exceed the server's avatar size limit.
+  const std::size_t limit = serverMaxAvatarBytes(opt.config, &warnings);
+  Result<int> downscaled = fitAvatarTextures(*avatar, limit, warnings);
+  if (!downscaled) return downscaled.error();
+
   // Save, load back, compare.
   progress.update(0.85f, "saving");
   const std::vector<std::uint8_t> bytes = encodeAvatar(*avatar);
@@ -151,6 +158,10 @@ Status runBuild(const BuildCommandOptions& opt) {
   // Summary.
   for (const std::string& w : warnings) fmt::print(stderr, "warning: {}\n", w);
   for (const std::string& w : report.warnings) fmt::print(stderr, "warning: {}\n", w);
+  if (bytes.size() > limit) {
+    fmt::print(stderr, "warning: {} is {} bytes, beyond the server's avatar limit of {} bytes\n",
+               opt.out, bytes.size(), limit);
+  }
   const CalibrationReport& c = report.calibration;
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   fmt::print(
@@ -159,6 +170,11 @@ Status runBuild(const BuildCommandOptions& opt) {
       opt.out, avatar->skin.vertexCount(), avatar->skeleton.jointCount(), report.primitives.size(),
       c.limb, c.joint, c.free, c.demoted, c.rest_pairs, bytes.size(), kAvatarFormatVersion, seconds,
       rebuilt ? " (the input's implicit model was replaced)" : "");
+  if (!avatar->look.empty()) {
+    fmt::print("look: {} materials, {} textures ({} bytes), {}\n", avatar->look.materials.size(),
+               avatar->look.textures.size(), avatar->look.textureBytes(),
+               avatar->look.uvs.empty() ? "no texture coordinates" : "texture coordinates");
+  }
   std::fflush(stdout);
   return {};
 }

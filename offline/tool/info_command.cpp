@@ -50,7 +50,12 @@ Status runInfo(const InfoOptions& opt) {
                           {"bbox_min", {box.min.x, box.min.y, box.min.z}},
                           {"bbox_max", {box.max.x, box.max.y, box.max.z}},
                           {"size", {size.x, size.y, size.z}},
-                          {"warnings", warnings}};
+                          {"warnings", warnings},
+                          {"look",
+                           {{"materials", avatar.look.materials.size()},
+                            {"textures", avatar.look.textures.size()},
+                            {"texture_bytes", avatar.look.textureBytes()},
+                            {"texture_coordinates", !avatar.look.uvs.empty()}}}};
     if (map) {
       nlohmann::json joints = nlohmann::json::object();
       for (std::size_t i = 0; i < map->map.canonical.size(); ++i) {
@@ -78,6 +83,13 @@ Status runInfo(const InfoOptions& opt) {
   fmt::print("bbox min:        {:.4f} {:.4f} {:.4f} m\n", box.min.x, box.min.y, box.min.z);
   fmt::print("bbox max:        {:.4f} {:.4f} {:.4f} m\n", box.max.x, box.max.y, box.max.z);
   fmt::print("size:            {:.4f} x {:.4f} x {:.4f} m\n", size.x, size.y, size.z);
+  fmt::print("look:            {} materials, {} textures ({} bytes){}\n",
+             avatar.look.materials.size(), avatar.look.textures.size(), avatar.look.textureBytes(),
+             avatar.look.uvs.empty() ? "" : ", texture coordinates");
+  for (const AvatarTexture& t : avatar.look.textures) {
+    fmt::print("  texture '{}': {} {}x{}, {} bytes\n", t.name, t.mime, t.width, t.height,
+               t.encoded.size());
+  }
   fmt::print("joint hierarchy (index name <- parent):\n");
   for (int j = 0; j < skel.jointCount(); ++j) {
     const int p = skel.parents[static_cast<std::size_t>(j)];
