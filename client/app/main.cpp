@@ -8,7 +8,7 @@
 //                 [--sensors FILE.toml [--calibrate-after S] | --source sim:CLIP.bvh
 //                  | --source recording:FILE.vrec] [--record FILE.vrec]
 //                 [--forces-out FILE.csv] [--force-feedback SENSORS.toml] [--log-level LEVEL]
-//                 [--netsim SPEC]
+//                 [--netsim SPEC] [--record-room FILE.glb]
 //   vistel-client --version   (the project version and the protocol versions it speaks)
 //
 // With sensors (client/app/sensor_input.hpp) a sensor thread reads the devices (or the
@@ -36,6 +36,8 @@
 // held and extrapolated, and the shown posture's age p50/p99. --netsim SPEC (or [network]
 // netsim) puts a simulated bad network between the client and the server on UDP
 // (client/net/net_sim.hpp: loss, latency, jitter, duplication, reordering).
+// --record-room FILE.glb writes, at exit, what the session showed as a skinned glTF
+// animation (client/record: every member's avatar and joint tracks, the props).
 //
 // Threads: this (main) thread owns the window/GL and renders; a network thread runs
 // Asio (NetDriver); a source thread produces the own postures; the room view skins in
@@ -76,6 +78,7 @@
 #include "client/net/prop_models.hpp"
 #include "client/net/remote_jitter.hpp"
 #include "client/net/tls_options.hpp"
+#include "client/record/room_recorder.hpp"
 #include "client/view/room_view.hpp"
 #include "common/avatar/avatar_io.hpp"
 #include "common/base/file.hpp"
@@ -269,6 +272,10 @@ int main(int argc, char** argv) {
       "simulate a bad network on UDP: comma-separated loss=P, latency=D, jitter=D, "
       "jitter_dist=uniform|normal, dup=P, reorder=P, reorder_delay=D, dir=both|in|out, seed=N "
       "(e.g. loss=0.1,latency=30ms,jitter=50ms; overrides [network] netsim)");
+  std::string record_room_path;  // client/record: the session as a skinned glTF animation
+  app.add_option("--record-room", record_room_path,
+                 "write what the session showed (every member's avatar and joint tracks, the "
+                 "props) as a skinned glTF animation to this .glb at exit");
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error, off (default: info)");
   app.set_version_flag("--version",
@@ -295,6 +302,12 @@ int main(int argc, char** argv) {
   if (const std::string tls_error = checkTlsOptions(tls_settings); !tls_error.empty()) {
     std::fprintf(stderr, "vistel-client: %s\n", tls_error.c_str());
     return 2;
+  }
+  if (!record_room_path.empty()) {
+    if (Status st = record::checkRecordPath(record_room_path); !st) {
+      std::fprintf(stderr, "vistel-client: --record-room %s\n", st.error().message.c_str());
+      return 2;
+    }
   }
   if (!screenshot.empty() && duration == 0.0) duration = 3.0;
   const Result<std::string> sensor_spec = sensorSpec(sensor_args, source_text);
@@ -477,6 +490,12 @@ int main(int argc, char** argv) {
   InteractionList received_list;
   std::unordered_map<std::string, std::shared_ptr<const AvatarModel>> models;
   models[own_hash] = *own_avatar;
+  std::unique_ptr<record::RoomRecorder> recorder;
+  Posture record_own;  // the own posture for the recorder, copied when a sample is due
+  if (!record_room_path.empty()) {
+    recorder = std::make_unique<record::RoomRecorder>(
+        record::RecorderOptions{.max_extrapolation_s = config->max_extrapolation_s});
+  }
   std::int64_t frame = 0;
   int exit_code = 0;
   while (!g_stop) {
@@ -487,6 +506,13 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "vistel-client: session ended: %s\n", driver->error().c_str());
       exit_code = 1;
       break;
+    }
+    if (recorder && recorder->due(elapsed)) {
+      if (sensors) {
+        sensors->copyLatest(record_own);
+      } else {
+        record_own = source.latest();
+      }
     }
     // Copy the roster and postures out under the session lock.
     driver->withSession([&](const ClientSession& s, double now) {
@@ -519,6 +545,7 @@ int main(int argc, char** argv) {
           props.emplace_back(p->id, p->ball);
         }
       }
+      if (recorder) recorder->sample(s, elapsed, play_time, record_own);
       return 0;
     });
     if (remote_jitter) {
@@ -610,6 +637,24 @@ int main(int argc, char** argv) {
     }
     ++frame;
     std::this_thread::sleep_until(start + seconds(static_cast<double>(frame) * frame_interval));
+  }
+
+  // The session's recording (at the end of the loop: duration, window closed, SIGINT/SIGTERM).
+  if (recorder) {
+    auto written = recorder->write(record_room_path,
+                                   [&cache](const std::string& hash) { return cache->find(hash); });
+    if (!written) {
+      std::fprintf(stderr, "vistel-client: --record-room: %s\n", written.error().message.c_str());
+      exit_code = 1;
+    } else {
+      for (const std::string& w : written->warnings) spdlog::warn("--record-room: {}", w);
+      std::printf(
+          "vistel-client: recorded %d members and %d props over %.1f s (%lld keys) to %s: %.2f "
+          "MiB\n",
+          written->members, written->props, written->duration_s,
+          static_cast<long long>(written->keys), record_room_path.c_str(),
+          static_cast<double>(written->bytes) / (1024.0 * 1024.0));
+    }
   }
 
   // Screenshot, stats, leave.

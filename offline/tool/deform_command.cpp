@@ -305,10 +305,12 @@ Status runDeform(const DeformCommandOptions& opt) {
   }
   const std::size_t total_vertices = vertex_offset.back();
   // The file holds a morph target (positions and normals, float32) per frame beside the
-  // mesh: estimate it before spending the time, and refuse what nobody can open.
+  // mesh, and the animation's one-hot weights (frames^2 floats) and times: estimate it
+  // before spending the time, and refuse what nobody can open.
+  const auto frames_d = static_cast<double>(frame_count);
   const double estimate_mib =
-      (static_cast<double>(frame_count + 1) * static_cast<double>(total_vertices) * 24.0 +
-       static_cast<double>(gltf.mesh.indices.size()) * 4.0) /
+      ((frames_d + 1.0) * static_cast<double>(total_vertices) * 24.0 +
+       static_cast<double>(gltf.mesh.indices.size()) * 4.0 + frames_d * (frames_d + 1.0) * 4.0) /
       (1024.0 * 1024.0);
   if (estimate_mib > opt.max_mib && !opt.allow_large) {
     return fail(

@@ -3,6 +3,7 @@
 // ball into a glTF the Khronos validator accepts, --rigid-only against the deformed file,
 // the forces CSV (rows, equal and opposite forces), and bad arguments.
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -335,6 +336,11 @@ TEST(DeformCli, AnOversizedExportIsRefusedBeforeItIsComputed) {
   EXPECT_NE(run.err.find("40 frames of"), std::string::npos) << run.err;
   const double mib = static_cast<double>(std::filesystem::file_size(dir + "/big.glb")) / 1048576.0;
   EXPECT_GT(mib, 1.0);
+  // The estimate it printed is the file's size to within 2%.
+  const std::size_t about = run.err.find("about ");
+  ASSERT_NE(about, std::string::npos) << run.err;
+  const double estimate = std::strtod(run.err.c_str() + about + 6, nullptr);
+  EXPECT_NEAR(estimate, mib, 0.02 * mib) << run.err;
 }
 
 }  // namespace

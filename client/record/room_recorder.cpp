@@ -1,0 +1,206 @@
+#include "client/record/room_recorder.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <system_error>
+
+#include <fmt/format.h>
+#include <glm/gtc/quaternion.hpp>
+
+#include "client/record/room_glb.hpp"
+#include "common/base/file.hpp"
+
+namespace vistel::record {
+namespace {
+
+constexpr double kDefaultRateHz = 60.0;
+
+// Ends a span that is open (its end still unset) at t.
+void closeSpan(std::vector<Span>& spans, double t) {
+  if (!spans.empty() && spans.back().end < spans.back().start) spans.back().end = t;
+}
+bool spanOpen(const std::vector<Span>& spans) {
+  return !spans.empty() && spans.back().end < spans.back().start;
+}
+
+void cutMember(RecordedMember& rec) {
+  rec.seat_translation.cut();
+  rec.seat_rotation.cut();
+  rec.root_translation.cut();
+  for (QuatTrack& track : rec.rotations) track.cut();
+  for (Vec3Track& track : rec.translations) track.cut();
+}
+
+}  // namespace
+
+Status checkRecordPath(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (path.empty()) return fail("no file name given");
+  if (fs::is_directory(path, ec)) return fail("{}: is a folder (give a .glb file name)", path);
+  const fs::path parent = fs::path(path).parent_path();
+  if (!parent.empty() && !fs::is_directory(parent, ec)) {
+    return fail("{}: the folder {} does not exist", path, parent.string());
+  }
+  return {};
+}
+
+RoomRecorder::RoomRecorder(RecorderOptions options) : options_(options) {}
+
+RecordedMember& RoomRecorder::memberFor(const net::RemoteMember& m) {
+  const std::string key = m.name + '\n' + m.avatar_hash;
+  auto found = member_index_.find(key);
+  if (found != member_index_.end()) return recording_.members[found->second];
+  // A new member (a name seen again with another avatar is another member).
+  RecordedMember rec;
+  rec.name = m.name;
+  for (const RecordedMember& other : recording_.members) {
+    if (other.name == m.name) rec.name = fmt::format("{} ({})", m.name, recording_.members.size());
+  }
+  rec.avatar_hash = m.avatar_hash;
+  rec.seat_translation = Vec3Track(options_.translation_tolerance_m);
+  rec.seat_rotation = QuatTrack(options_.rotation_tolerance_rad);
+  rec.root_translation = Vec3Track(options_.translation_tolerance_m);
+  member_index_.emplace(key, recording_.members.size());
+  member_seen_.push_back(-1);
+  recording_.members.push_back(std::move(rec));
+  return recording_.members.back();
+}
+
+RecordedProp& RoomRecorder::propFor(const net::RemoteProp& p) {
+  auto found = prop_index_.find(p.id);
+  if (found != prop_index_.end()) return recording_.props[found->second];
+  RecordedProp rec;
+  rec.id = p.id;
+  rec.name = fmt::format("ball {}", recording_.props.size() + 1);
+  rec.ball = p.ball;
+  rec.position = Vec3Track(options_.translation_tolerance_m);
+  prop_index_.emplace(p.id, recording_.props.size());
+  prop_seen_.push_back(-1);
+  recording_.props.push_back(std::move(rec));
+  return recording_.props.back();
+}
+
+void RoomRecorder::addPosture(RecordedMember& rec, const net::Seat& seat, const Posture& posture,
+                              double t) {
+  const std::size_t nj = posture.rotations.size();
+  // The joint count is fixed by the first posture (the avatar's); others are not shown.
+  if (rec.rotations.empty()) {
+    rec.rotations.assign(nj, QuatTrack(options_.rotation_tolerance_rad));
+  }
+  if (rec.rotations.size() != nj) return;
+  if (!posture.translations.empty() && posture.translations.size() == nj &&
+      rec.translations.empty()) {
+    rec.translations.assign(nj, Vec3Track(options_.translation_tolerance_m));
+  }
+  rec.seat_translation.add(t, glm::vec3(seat.x, 0.0f, seat.z));
+  rec.seat_rotation.add(t, glm::angleAxis(seat.yaw, glm::vec3(0.0f, 1.0f, 0.0f)));
+  rec.root_translation.add(t, posture.root_translation);
+  for (std::size_t j = 0; j < nj; ++j)
+    rec.rotations[j].add(t, glm::normalize(posture.rotations[j]));
+  if (!rec.translations.empty() && posture.translations.size() == nj) {
+    for (std::size_t j = 1; j < nj; ++j) rec.translations[j].add(t, posture.translations[j]);
+  }
+}
+
+void RoomRecorder::sample(const net::ClientSession& session, double now, double play_time,
+                          const Posture& own) {
+  if (!due(now)) return;
+  const double rate = options_.rate_hz > 0.0       ? options_.rate_hz
+                      : session.tickRateHz() > 0.0 ? session.tickRateHz()
+                                                   : kDefaultRateHz;
+  // Samples on a grid of the interval; a frame up to a quarter interval early takes its
+  // grid point, and a stall longer than an interval restarts the grid.
+  const bool first = interval_ <= 0.0;
+  interval_ = 1.0 / rate;
+  next_due_ = first ? now + interval_ : next_due_ + interval_;
+  if (next_due_ < now) next_due_ = now + interval_;
+  const double t = start_ < 0.0 ? 0.0 : now - start_;
+  if (start_ >= 0.0 && !(t > last_t_)) return;
+
+  // Members: the posture each shows now (remote: the jitter buffer at the playback time).
+  for (const auto& member : session.members()) {
+    const net::RemoteMember& m = *member;
+    const Posture* posture = nullptr;
+    if (m.is_self) {
+      posture = own.rotations.empty() ? nullptr : &own;
+    } else if (m.buffer.sampleShown(play_time, options_.max_extrapolation_s, scratch_) !=
+               net::JitterBuffer::Shown::kNone) {
+      posture = &scratch_;
+    }
+    if (posture == nullptr || posture->rotations.empty()) continue;
+    if (start_ < 0.0) start_ = now;
+    RecordedMember& rec = memberFor(m);
+    const std::size_t index = static_cast<std::size_t>(&rec - recording_.members.data());
+    if (!spanOpen(rec.spans)) rec.spans.push_back({t, -1.0});
+    member_seen_[index] = stamp_;
+    addPosture(rec, m.seat, *posture, t);
+  }
+
+  // Props: their centres at the playback time.
+  for (const auto& prop : session.props()) {
+    net::PropSample state;
+    if (!prop->track.sample(play_time, state)) continue;
+    if (start_ < 0.0) start_ = now;
+    RecordedProp& rec = propFor(*prop);
+    const std::size_t index = static_cast<std::size_t>(&rec - recording_.props.data());
+    if (!spanOpen(rec.spans)) rec.spans.push_back({t, -1.0});
+    prop_seen_[index] = stamp_;
+    rec.position.add(t, state.position);
+  }
+  if (start_ < 0.0) return;  // nothing shown yet: the recording has not started
+
+  // Whoever was shown before but not in this sample has gone: its span ends here.
+  for (std::size_t i = 0; i < recording_.members.size(); ++i) {
+    RecordedMember& rec = recording_.members[i];
+    if (member_seen_[i] != stamp_ && spanOpen(rec.spans)) {
+      closeSpan(rec.spans, t);
+      cutMember(rec);
+    }
+  }
+  for (std::size_t i = 0; i < recording_.props.size(); ++i) {
+    RecordedProp& rec = recording_.props[i];
+    if (prop_seen_[i] != stamp_ && spanOpen(rec.spans)) {
+      closeSpan(rec.spans, t);
+      rec.position.cut();
+    }
+  }
+  last_t_ = t;
+  recording_.duration_s = t;
+  ++recording_.samples;
+  ++stamp_;
+}
+
+const RoomRecording& RoomRecorder::finish() {
+  // Spans still open end with the recording (shown to its last sample).
+  for (RecordedMember& rec : recording_.members) {
+    if (spanOpen(rec.spans)) rec.spans.back().end = std::max(last_t_, rec.spans.back().start);
+    cutMember(rec);
+  }
+  for (RecordedProp& rec : recording_.props) {
+    if (spanOpen(rec.spans)) rec.spans.back().end = std::max(last_t_, rec.spans.back().start);
+    rec.position.cut();
+  }
+  return recording_;
+}
+
+Result<RecordingSummary> RoomRecorder::write(
+    const std::string& path,
+    const std::function<std::shared_ptr<const AvatarModel>(const std::string&)>& avatar_of) {
+  finish();
+  for (RecordedMember& rec : recording_.members) {
+    if (!rec.avatar && avatar_of) rec.avatar = avatar_of(rec.avatar_hash);
+  }
+  for (RecordedProp& rec : recording_.props) {
+    if (!rec.model) rec.model = prop_models_.ball(rec.ball);
+  }
+  RecordingSummary summary;
+  Result<std::vector<std::uint8_t>> bytes = encodeRoomGlb(recording_, &summary);
+  if (!bytes) return withContext(path, bytes.error());
+  if (Status st = writeFileBytes(path, *bytes); !st) return st.error();
+  summary.bytes = bytes->size();
+  return summary;
+}
+
+}  // namespace vistel::record

@@ -1,0 +1,138 @@
+// What a client showed of its room, recorded for export as a skinned glTF animation
+// (vistel-client --record-room FILE.glb; room_glb.hpp writes it).
+//
+// Every sample (at the room's tick rate by default) takes, for each roster member, the
+// posture the client shows: a remote member's from its jitter buffer at the playback time
+// (as the frame loop samples it, extrapolation limit included), the own avatar's latest
+// posture (drawn ahead of the others, as on screen); and each prop's centre. Tracks per
+// member (keyed by name and avatar hash, so a member who reconnects continues its tracks):
+// the seat (translation and yaw), the root translation, every joint's local rotation (and
+// local translations when the postures carry them), each reduced online to keyframes
+// (keyframe_track.hpp). A member or prop that is absent from a sample (not yet joined, left,
+// or nothing received yet) is outside its span; the export scales it to zero there.
+//
+// Time: the caller's monotonic clock in seconds (steady across reconnections, unlike the
+// server clock); the recording starts (t = 0) at the first sample that shows anyone.
+//
+// Memory: the keys (a few per second per moving joint) and a bounded window per track.
+// Not thread-safe: call from one thread (the frame loop).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "client/net/client_session.hpp"
+#include "client/net/prop_models.hpp"
+#include "client/record/keyframe_track.hpp"
+#include "common/anim/posture.hpp"
+#include "common/avatar/avatar_model.hpp"
+#include "common/base/result.hpp"
+
+namespace vistel::record {
+
+struct RecorderOptions {
+  double rate_hz = 0.0;                         // samples per second; 0: the room's tick rate
+  double max_extrapolation_s = 0.1;             // as the frame loop's ([playback])
+  float rotation_tolerance_rad = 0.004363323f;  // 0.25 degree per joint
+  float translation_tolerance_m = 0.0005f;      // 0.5 mm (root, seat, props)
+};
+
+// A time span [start, end) in recording seconds during which something was shown.
+struct Span {
+  double start = 0.0;
+  double end = 0.0;
+};
+
+struct RecordedMember {
+  std::string name;
+  std::string avatar_hash;
+  std::vector<Span> spans;
+  Vec3Track seat_translation;                 // room space, metres (x, 0, z)
+  QuatTrack seat_rotation;                    // yaw about +Y
+  Vec3Track root_translation;                 // model space (Posture::root_translation)
+  std::vector<QuatTrack> rotations;           // local rotation per joint (njoint)
+  std::vector<Vec3Track> translations;        // local translation per joint, or empty (rest)
+  std::shared_ptr<const AvatarModel> avatar;  // filled when exporting (null: not found)
+};
+
+struct RecordedProp {
+  std::uint32_t id = 0;
+  std::string name;  // "ball 1", "ball 2", ... in order of appearance
+  BallSpec ball;
+  std::vector<Span> spans;
+  Vec3Track position;                        // centre, room space, metres
+  std::shared_ptr<const AvatarModel> model;  // filled when exporting (its icosphere skin)
+};
+
+struct RoomRecording {
+  double duration_s = 0.0;  // time of the last sample
+  std::int64_t samples = 0;
+  std::vector<RecordedMember> members;  // in order of appearance
+  std::vector<RecordedProp> props;
+};
+
+struct RecordingSummary {
+  int members = 0;          // written as skins
+  int members_skipped = 0;  // avatar never received (named in warnings)
+  int props = 0;
+  double duration_s = 0.0;
+  std::int64_t samples = 0;
+  std::int64_t keys = 0;  // over all written channels
+  std::size_t bytes = 0;
+  std::vector<std::string> warnings;
+};
+
+// Checks at start what write() will need: `path` is not a folder and its folder exists
+// (the error names it). Nothing is created.
+Status checkRecordPath(const std::string& path);
+
+class RoomRecorder {
+ public:
+  explicit RoomRecorder(RecorderOptions options = {});
+
+  // Called every frame with the session locked: when a sample is due at `now` (the
+  // caller's clock, seconds), records every member and prop as shown at `play_time`
+  // (server clock); `own` is the own avatar's posture (used for the member marked self).
+  // Allocation-free once every track exists, but for keys and window growth.
+  void sample(const net::ClientSession& session, double now, double play_time, const Posture& own);
+
+  // True when sample() would record at `now` (to skip copying the own posture otherwise).
+  bool due(double now) const { return now >= next_due_ - 0.25 * interval_; }
+
+  // Closes open spans at the last sample and flushes every track's window. Idempotent.
+  const RoomRecording& finish();
+
+  // finish(), then resolves the avatars (`avatar_of(hash)`, null: unknown) and the props'
+  // models, encodes the .glb (room_glb.hpp) and writes it atomically to `path`.
+  Result<RecordingSummary> write(
+      const std::string& path,
+      const std::function<std::shared_ptr<const AvatarModel>(const std::string&)>& avatar_of);
+
+  const RoomRecording& recording() const { return recording_; }
+
+ private:
+  RecordedMember& memberFor(const net::RemoteMember& m);
+  RecordedProp& propFor(const net::RemoteProp& p);
+  void addPosture(RecordedMember& rec, const net::Seat& seat, const Posture& posture, double t);
+
+  RecorderOptions options_;
+  RoomRecording recording_;
+  std::unordered_map<std::string, std::size_t> member_index_;  // name + '\n' + hash
+  std::unordered_map<std::uint32_t, std::size_t> prop_index_;
+  std::vector<std::int64_t> member_seen_;  // last sample index each member was shown
+  std::vector<std::int64_t> prop_seen_;
+  std::int64_t stamp_ = 0;  // samples taken so far
+  double start_ = -1.0;     // caller's time of recording t = 0 (< 0: not started)
+  double last_t_ = 0.0;     // recording time of the last sample
+  double next_due_ = 0.0;   // caller's time of the next grid point
+  double interval_ = 0.0;   // seconds between samples (0: none taken yet)
+  Posture scratch_;
+  net::PropModels prop_models_;
+};
+
+}  // namespace vistel::record
