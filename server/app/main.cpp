@@ -15,6 +15,9 @@
 // [--ttl 1h]` prints such a token on stdout (ttl: seconds, or with a unit s, m, h, d).
 // --tls-cert F --tls-key F (or [tls] cert_file, key_file) runs the control channel over
 // TLS 1.2+ with that certificate chain and key (PEM); clients then need --tls.
+// --web-port P (or [web] port) serves the room list, spectator pages and avatars over HTTP
+// and WebSocket on that TCP port (0: a free one, printed as "vistel-server web on
+// http://ADDRESS:PORT/"); server/web/web_server.hpp.
 #include <atomic>
 #include <cstdio>
 #include <memory>
@@ -27,6 +30,7 @@
 
 #include "common/auth/secret_file.hpp"
 #include "common/auth/token_command.hpp"
+#include "common/base/embedded.hpp"
 #include "common/base/file.hpp"
 #include "common/wire/packets.hpp"
 #include "server/core/server_config.hpp"
@@ -35,6 +39,8 @@
 #include "server/http/prometheus.hpp"
 #include "server/shell/asio.hpp"
 #include "server/shell/server_shell.hpp"
+#include "server/web/web_config.hpp"
+#include "server/web/web_server.hpp"
 #include "vistel_version.hpp"
 
 int main(int argc, char** argv) {
@@ -59,6 +65,12 @@ int main(int argc, char** argv) {
                  "write the load (ticks, CPU, datagrams) as JSON to this file at shutdown");
   app.add_option("--metrics-port", metrics_port,
                  "serve /healthz, /readyz and /metrics on this TCP port (0: a free port)")
+      ->check(CLI::Range(0, 65535));
+  int web_port = -2;
+  app.add_option("--web-port", web_port,
+                 "serve the room list, spectator pages (3D, in a browser) and avatars over "
+                 "HTTP and WebSocket on this TCP port (0: a free port; default from config "
+                 "[web] port: none)")
       ->check(CLI::Range(0, 65535));
   app.add_flag("--agones", agones,
                "report to the Agones SDK sidecar at localhost:$AGONES_SDK_HTTP_PORT");
@@ -105,6 +117,15 @@ int main(int argc, char** argv) {
     spdlog::error("{}", config.error().message);
     return 1;
   }
+  // [web] is read by server/web from the same text (loadServerConfig skips it).
+  auto config_text = readConfigText(config_path);
+  Result<WebConfig> web_config = config_text ? parseWebConfig(*config_text, config_path)
+                                             : Result<WebConfig>(config_text.error());
+  if (!web_config) {
+    spdlog::error("{}", web_config.error().message);
+    return 1;
+  }
+  if (web_port >= 0) web_config->port = web_port;
   if (port >= 0) config->port = static_cast<std::uint16_t>(port);
   if (!bind.empty()) config->bind_address = bind;
   if (!log_level.empty()) {
@@ -173,6 +194,24 @@ int main(int argc, char** argv) {
     std::printf("vistel-server metrics on %s\n", http->localAddress().c_str());
     std::fflush(stdout);
   }
+  // Spectators: the room list, pages and WebSockets (server/web).
+  std::unique_ptr<WebServer> web;
+  if (web_config->port >= 0) {
+    WebServerOptions web_options;
+    web_options.config = *web_config;
+    web_options.bind_address = config->bind_address;
+    web_options.seat_layout = config->seat_layout;
+    web_options.tick_rate_hz = config->tick_rate_hz;
+    web_options.join_secret = config->join_secret;
+    auto started = WebServer::start(io, shell, std::move(web_options));
+    if (!started) {
+      spdlog::error("--web-port: {}", started.error().message);
+      return 1;
+    }
+    web = std::move(*started);
+    std::printf("vistel-server web on http://%s/\n", web->localAddress().c_str());
+    std::fflush(stdout);
+  }
   std::unique_ptr<AgonesSdk> sdk;
   if (agones) {
     auto options = agonesOptionsFromEnvironment();
@@ -203,6 +242,7 @@ int main(int argc, char** argv) {
     spdlog::info("signal {} received", signal);
     ready = false;
     if (http) http->stop();
+    if (web) web->stop();
     if (sdk) sdk->stop();
     shell.stop();
   });
@@ -222,6 +262,7 @@ int main(int argc, char** argv) {
   run();
   for (std::thread& t : threads) t.join();
   http.reset();
+  web.reset();
   sdk.reset();
   if (!stats_json.empty()) {
     if (Status st = writeFileText(stats_json, shell.loadJson() + "\n"); !st) {

@@ -326,6 +326,7 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
     RoomRecord& r = rooms_[rid];
     r.id = RoomId{rid};
     r.name = join.room();
+    r.created_at = now;
     r.seat_taken.assign(static_cast<std::size_t>(config_.max_members_per_room), false);
     room_by_name_[r.name] = rid;
     roomOpened(r, c);
@@ -367,6 +368,7 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
   m.name = join.name();
   m.avatar_hash = join.avatar_hash();
   m.avatar_size = join.avatar_size();
+  m.joined_at = now;
   auto free_seat = std::find(room->seat_taken.begin(), room->seat_taken.end(), false);
   if (preferred_seat >= 0 && static_cast<std::size_t>(preferred_seat) < room->seat_taken.size() &&
       !room->seat_taken[static_cast<std::size_t>(preferred_seat)]) {

@@ -71,6 +71,23 @@ namespace vistel::server {
 
 inline constexpr std::uint32_t kProtocolVersion = 4;
 
+// What a spectator (server/web) may see of a room: its members as the roster names them.
+// Times are the lobby's clock (the `now` it is fed), seconds.
+struct LobbyMemberView {
+  std::uint32_t id = 0;
+  std::string name;
+  std::string avatar_hash;  // content hash (64 hex) of its .vavatar
+  bool avatar_ready = false;
+  int seat = 0;  // seat index (seatPlacement with the config's layout)
+  double joined_at = 0.0;
+};
+struct LobbyRoomView {
+  std::uint32_t id = 0;
+  std::string name;
+  double created_at = 0.0;
+  std::vector<LobbyMemberView> members;  // join order
+};
+
 class Lobby {
  public:
   // seed 0: keys from std::random_device; otherwise a deterministic generator (tests).
@@ -117,6 +134,9 @@ class Lobby {
   std::vector<PropId> propsOf(std::string_view room) const;
   // The room of a live member.
   std::optional<RoomId> roomOf(MemberId member) const;
+  // Spectators (server/web): every open room (by name), or one; O(members) (lobby_view.cpp).
+  std::vector<LobbyRoomView> roomViews() const;
+  std::optional<LobbyRoomView> roomView(std::string_view name) const;
   // A live member's session keys (nullptr for an unknown member): for tests that play its
   // client.
   const wire::SessionKeys* keysOf(std::uint32_t member) const {
@@ -158,6 +178,7 @@ class Lobby {
     wire::Endpoint challenged;    // the address the last challenge went to
     std::uint64_t challenge = 0;  // ... and its cookie (0: none)
     double last_spawn = -1e300;
+    double joined_at = 0.0;  // lobby clock
   };
   struct PropRecord {
     PropId id;
@@ -171,7 +192,9 @@ class Lobby {
     std::vector<bool> seat_taken;   // per seat
     std::vector<PropRecord> props;  // spawn order
     std::string creator_address;    // counted in rooms_by_address_ ("" = not counted)
+    double created_at = 0.0;        // lobby clock
   };
+  LobbyRoomView viewOf(const RoomRecord& room) const;
 
   void handleMessage(ConnId conn, Connection& c, std::span<const std::uint8_t> payload, double now,
                      Effects& fx);

@@ -100,6 +100,16 @@ class Room {
   // The collision world as of the last tick.
   const RoomWorld& world() const { return world_; }
 
+  // Spectators (server/web): f(member id, the newest accepted posture record's §3.3
+  // bytes) for every member that has one, in join order. The bytes live until the next
+  // call that changes the room.
+  template <typename F>
+  void forEachPosture(F&& f) const {
+    for (const Member& m : members_) {
+      if (m.has_posture) f(m.id.value, std::span<const std::uint8_t>(m.record_bytes));
+    }
+  }
+
  private:
   // A posture sequence further than this from the last one decoded is a jump (Room::onDatagram).
   static constexpr std::uint16_t kMaxSequenceJump = 1024;

@@ -77,8 +77,9 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
     return fail("{}: {} ({})", source_name, e.description(), where.str());
   }
   for (const auto& [key, node] : root) {
+    // [web] is read by server/web (parseWebConfig).
     static const std::set<std::string, std::less<>> kSections = {
-        "network", "session", "limits", "room", "log", "world", "props", "auth", "tls"};
+        "network", "session", "limits", "room", "log", "world", "props", "auth", "tls", "web"};
     if (key.str() == "prop" && node.is_array_of_tables()) continue;
     if (!kSections.count(key.str()) || !node.is_table()) {
       return fail("{}: unknown section or key '{}'", source_name, key.str());

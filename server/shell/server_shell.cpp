@@ -694,6 +694,63 @@ void ServerShell::collectMetrics(std::function<void(std::string)> reply, bool re
   });
 }
 
+// ---------------------------------------------------------------- spectators (server/web)
+
+void ServerShell::roomViews(std::function<void(std::vector<LobbyRoomView>, double)> reply) {
+  asio::post(lobby_strand_, [this, reply = std::move(reply)] {
+    guarded("room views", [&] { reply(lobby_.roomViews(), now()); });
+  });
+}
+
+void ServerShell::spectate(std::string room,
+                           std::function<void(std::optional<SpectatorFrame>)> reply) {
+  asio::post(lobby_strand_, [this, room = std::move(room), reply = std::move(reply)]() mutable {
+    std::optional<LobbyRoomView> view;
+    guarded("spectate", [&] { view = lobby_.roomView(room); });
+    std::shared_ptr<RoomHost> host;
+    if (view && !stopping_) {
+      std::lock_guard lock(rooms_mutex_);
+      auto it = rooms_.find(view->id);
+      if (it != rooms_.end()) host = it->second;
+    }
+    if (!host) {
+      guarded("spectate reply", [&] { reply(std::nullopt); });
+      return;
+    }
+    asio::post(host->strand, [this, host, view = std::move(*view), reply = std::move(reply)] {
+      guarded("spectate room", [&] {
+        if (host->closed) {
+          reply(std::nullopt);
+          return;
+        }
+        SpectatorFrame frame;
+        frame.now = now();
+        frame.room = std::move(view);
+        host->room.forEachPosture([&](std::uint32_t member, std::span<const std::uint8_t> bytes) {
+          frame.postures.push_back({member, {bytes.begin(), bytes.end()}});
+        });
+        for (const WorldBody& body : host->room.world().bodies()) {
+          if (!body.is_prop) continue;
+          if (const BallState* ball = host->room.world().propState(PropId{body.id})) {
+            frame.props.push_back({body.id, ball->position, ball->velocity, ball->radius});
+          }
+        }
+        reply(std::move(frame));
+      });
+    });
+  });
+}
+
+void ServerShell::avatarFile(
+    std::string hash, std::function<void(std::shared_ptr<const std::vector<std::uint8_t>>)> reply) {
+  asio::post(lobby_strand_, [this, hash = std::move(hash), reply = std::move(reply)] {
+    guarded("avatar file", [&] {
+      const StoredAvatar* stored = lobby_.avatars().find(hash);
+      reply(stored != nullptr ? stored->bytes : nullptr);
+    });
+  });
+}
+
 // ---------------------------------------------------------------- shutdown
 
 void ServerShell::stop() {

@@ -34,6 +34,24 @@
 
 namespace vistel::server {
 
+// Spectators (server/web): one sample of a room.
+struct SpectatorProp {
+  std::uint32_t id = 0;
+  glm::vec3 position{0.0f};  // room space, metres
+  glm::vec3 velocity{0.0f};  // m/s
+  float radius = 0.1f;       // m
+};
+struct SpectatorPosture {
+  std::uint32_t member = 0;
+  std::vector<std::uint8_t> record;  // the newest accepted posture, WIRE.md §3.3 bytes
+};
+struct SpectatorFrame {
+  double now = 0.0;  // server clock (seconds since start; the postures' clock)
+  LobbyRoomView room;
+  std::vector<SpectatorPosture> postures;
+  std::vector<SpectatorProp> props;  // as of the room's last tick
+};
+
 class ServerShell {
  public:
   ServerShell(asio::io_context& io, const ServerConfig& config);
@@ -56,6 +74,16 @@ class ServerShell {
     room_closed_ = std::move(handler);
   }
   std::uint16_t localPort() const { return port_; }
+
+  // Spectators (server/web). Each reply runs once, on a strand of the shell (keep it
+  // short). The open rooms, sampled on the lobby strand:
+  void roomViews(std::function<void(std::vector<LobbyRoomView>, double now)> reply);
+  // A room by name: the lobby's view, then its postures and props from its strand;
+  // nullopt when no such room is open (or the server is stopping).
+  void spectate(std::string room, std::function<void(std::optional<SpectatorFrame>)> reply);
+  // The .vavatar bytes of an avatar some member uses (null when the server has none).
+  void avatarFile(std::string hash,
+                  std::function<void(std::shared_ptr<const std::vector<std::uint8_t>>)> reply);
 
   // Graceful stop: every connection gets a shutting-down error, sockets and timers
   // close, and io.run() returns once the last writes are flushed (at most ~2 s).

@@ -1,0 +1,83 @@
+// The spectator web server: HTTP/1.1 and WebSocket (Boost.Beast) on its own TCP port, in
+// the session server's io_context (web_request.hpp lists the paths).
+//
+// - The room list (HTML, JSON) and each room's spectator page (web/spectator.*), three.js
+//   and the page's scripts, all embedded in the binary (web_assets.hpp).
+// - Avatars as skinned .glb by content hash (avatar_glb.hpp), converted from the
+//   server's .vavatar once and cached (at most kGlbCacheEntries).
+// - /ws/room/NAME: a WebSocket per spectator. One feed per watched room samples it
+//   (ServerShell::spectate) at the room's tick rate (at most [web] max_stream_rate_hz)
+//   and sends every spectator of the room the same messages (spectator_stream.hpp): the
+//   roster when it changes, the room's state when it changes, and a binary frame per
+//   sample. A spectator that falls behind skips frames (only the newest waits); one more
+//   than max_ws_queue_bytes behind is dropped. With join tokens (a join secret), a
+//   WebSocket needs ?token=T, a valid token for that room (any name): otherwise it gets
+//   a status "unauthorized" and is closed (1008, policy violation). An upgrade from a page
+//   of another site (an Origin header other than this server's) is refused with 403.
+//
+// Bounds (WebConfig): connections in all and per address, requests per second per
+// address (429 beyond), a request head within max_header_bytes (431) and
+// read_timeout_s, kept-alive connections idle_timeout_s, writes write_timeout_s,
+// spectators per room (503 beyond), WebSocket messages from the browser at most 1 KiB
+// and 20 a second (the page sends none; more closes the socket). Only GET.
+//
+// Threads: every connection and feed has its own strand; the shared tables a mutex.
+// stop() closes everything so that io.run() can return; destroy the server after.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/base/result.hpp"
+#include "common/scene/seat_layout.hpp"
+#include "server/shell/asio.hpp"
+#include "server/shell/server_shell.hpp"
+#include "server/web/web_config.hpp"
+
+namespace vistel::server {
+
+struct WebServerOptions {
+  WebConfig config;
+  std::string bind_address = "127.0.0.1";
+  SeatLayout seat_layout;                 // the server's ([room]): where members stand
+  double tick_rate_hz = 60.0;             // the rooms' rate
+  std::vector<std::uint8_t> join_secret;  // non-empty: WebSockets need a token
+};
+
+class WebServer {
+ public:
+  static constexpr std::size_t kGlbCacheEntries = 32;
+
+  struct Stats {
+    std::uint64_t requests = 0;        // request heads answered
+    std::uint64_t errors = 0;          // ... with a 4xx or 5xx status
+    std::uint64_t refused = 0;         // connections closed at accept (limits)
+    std::uint64_t rate_limited = 0;    // requests answered 429
+    std::uint64_t timed_out = 0;       // connections closed by a read or write deadline
+    std::uint64_t spectators = 0;      // WebSockets accepted
+    std::uint64_t unauthorized = 0;    // WebSockets refused for their token
+    std::uint64_t frames_sent = 0;     // binary frames written to spectators
+    std::uint64_t frames_skipped = 0;  // frames a slow spectator skipped
+  };
+
+  // Binds options.bind_address:options.config.port (0: a free port) and starts
+  // accepting. The error names the address and the reason.
+  static Result<std::unique_ptr<WebServer>> start(asio::io_context& io, ServerShell& shell,
+                                                  WebServerOptions options);
+  ~WebServer();
+
+  std::string localAddress() const;  // "ADDRESS:PORT"
+  Stats stats() const;
+  // Stops accepting and closes every connection (spectators get a close "going away").
+  void stop();
+
+  struct State;
+
+ private:
+  explicit WebServer(std::shared_ptr<State> state);
+  std::shared_ptr<State> state_;
+};
+
+}  // namespace vistel::server
