@@ -8,7 +8,8 @@
 //                 [--sensors FILE.toml [--calibrate-after S] | --source sim:CLIP.bvh
 //                  | --source recording:FILE.vrec] [--record FILE.vrec]
 //                 [--forces-out FILE.csv] [--force-feedback SENSORS.toml] [--log-level LEVEL]
-//                 [--netsim SPEC] [--record-room FILE.glb]
+//                 [--netsim SPEC] [--record-room FILE.glb] [--audio-in FILE.wav]
+//                 [--audio-out FILE.wav] [--mute] [--no-audio]
 //   vistel-client --version   (the project version and the protocol versions it speaks)
 //
 // With sensors (client/app/sensor_input.hpp) a sensor thread reads the devices (or the
@@ -38,6 +39,12 @@
 // (client/net/net_sim.hpp: loss, latency, jitter, duplication, reordering).
 // --record-room FILE.glb writes, at exit, what the session showed as a skinned glTF
 // animation (client/record: every member's avatar and joint tracks, the props).
+// Voice (client/voice/voice_engine.hpp, proto/VOICE.md): the default microphone and
+// speakers through PortAudio, or --audio-in FILE.wav (spoken once the session is live) and
+// --audio-out FILE.wav (the stereo mix heard, written at exit; with --frames and no
+// --audio-out, DIR/heard.wav); --mute sends nothing (M in the window toggles it),
+// --no-audio turns voice off. Remote voices are spatialised from the speakers' heads; a
+// speaking avatar lifts its chin (or opens its jaw) with what is heard from it.
 //
 // Threads: this (main) thread owns the window/GL and renders; a network thread runs
 // Asio (NetDriver); a source thread produces the own postures; the room view skins in
@@ -80,6 +87,8 @@
 #include "client/net/tls_options.hpp"
 #include "client/record/room_recorder.hpp"
 #include "client/view/room_view.hpp"
+#include "client/voice/voice_engine.hpp"
+#include "client/voice/voice_scene.hpp"
 #include "common/avatar/avatar_io.hpp"
 #include "common/base/file.hpp"
 #include "common/motion/bvh.hpp"
@@ -276,6 +285,18 @@ int main(int argc, char** argv) {
   app.add_option("--record-room", record_room_path,
                  "write what the session showed (every member's avatar and joint tracks, the "
                  "props) as a skinned glTF animation to this .glb at exit");
+  VoiceOptions voice_options;
+  bool no_audio = false;
+  app.add_option("--audio-in", voice_options.audio_in,
+                 "speak this audio file (WAV) instead of the microphone");
+  app.add_option("--audio-out", voice_options.audio_out,
+                 "write what is heard to this WAV file (stereo, 48 kHz) instead of the speakers");
+  int voice_kbps = 24;
+  app.add_option("--voice-kbps", voice_kbps,
+                 "Opus bitrate of the own voice, 16..32 kbit/s (default 24)")
+      ->check(CLI::Range(16, 32));
+  app.add_flag("--mute", voice_options.muted, "start with the own voice muted (M toggles)");
+  app.add_flag("--no-audio", no_audio, "no voice at all: nothing captured, sent or played");
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error, off (default: info)");
   app.set_version_flag("--version",
@@ -446,6 +467,22 @@ int main(int argc, char** argv) {
   auto work = asio::make_work_guard(io);
   auto driver = NetDriver::create(io, *server, settings, cache, {}, tls_settings);
   driver->setNetSim(*netsim);
+  voice_options.opus.bitrate_bps = 1000 * voice_kbps;
+  // Voice: its own thread on a 20 ms grid (client/voice).
+  std::unique_ptr<VoiceEngine> voice;
+  if (!no_audio) {
+    if (voice_options.audio_out.empty() && view && !frames_dir.empty()) {
+      voice_options.audio_out = frames_dir + "/heard.wav";
+    }
+    voice_options.label = "vistel-client: voice";
+    auto started = VoiceEngine::start(driver, voice_options);
+    if (!started) {
+      spdlog::error("{}", started.error().message);
+      return 1;
+    }
+    voice = std::move(*started);
+  }
+  VoiceScene voice_scene;
   driver->start();
   std::thread network([&io] { io.run(); });
   std::atomic<bool> stop_source{false};
@@ -557,12 +594,35 @@ int main(int argc, char** argv) {
       }
       remote_jitter->endFrame();
     }
+    // Voice: every head for the spatialiser (self is the listener).
+    if (voice) {
+      voice_scene.begin();
+      for (const FrameMember& f : members) {
+        auto model = cache->find(f.avatar_hash);
+        Posture own;
+        if (f.is_self && sensors) {
+          sensors->copyLatest(own);
+        } else if (f.is_self) {
+          own = source.latest();
+        }
+        const Posture* posture = f.is_self ? &own : f.has_posture ? &f.posture : nullptr;
+        voice_scene.add(f.id, f.is_self, model ? &model->skeleton : nullptr, posture,
+                        seatPlacement(f.seat));
+      }
+      voice_scene.commit(*voice);
+    }
     // Draw (the view skins every avatar in its worker pool).
     if (view) {
       const Clock::time_point frame_start = Clock::now();
       view->pollEvents();
       if (view->shouldClose()) break;
-      if (sensors) sensors->onKeys(view->takeKeyPresses());
+      const std::string keys = view->takeKeyPresses();
+      if (sensors) sensors->onKeys(keys);
+      if (voice && keys.find('M') != std::string::npos) {
+        voice->toggleMute();
+        std::printf("vistel-client: voice %s\n", voice->muted() ? "muted" : "on");
+        std::fflush(stdout);
+      }
       views.resize(members.size());
       std::optional<std::uint32_t> self_view;
       for (std::size_t i = 0; i < members.size(); ++i) {
@@ -585,6 +645,11 @@ int main(int argc, char** argv) {
           v.posture = source.latest();
         } else if (f.has_posture) {
           v.posture = f.posture;
+          // Lip sync: the jaw (or chin) follows what is heard from this member now.
+          if (voice && v.avatar) {
+            applyVoiceToPosture(v.avatar->skeleton, mouthOpening(voice->speakingLevel(f.id)),
+                                v.posture);
+          }
         } else if (v.avatar) {
           v.posture = restPosture(v.avatar->skeleton);
         }
@@ -681,8 +746,16 @@ int main(int argc, char** argv) {
     line += "; shown: " + playbackSummary(playback.total());
     return std::make_pair(text, line);
   });
+  if (voice) {
+    if (Status st = voice->stop(); !st) {
+      spdlog::error("{}", st.error().message);
+      exit_code = 1;
+    }
+    std::printf("vistel-client: %s\n", voice->summary().c_str());
+  }
   if (!stats_path.empty()) {
     const std::string fields = figures.json() + ",\n  \"playback\": " + playbackJson(playback) +
+                               (voice ? ",\n  \"voice\": " + voice->json() : std::string()) +
                                (own_forces ? ",\n" + own_forces->json() : std::string());
     if (Status st = writeFileText(stats_path, withFields(json, fields)); !st) {
       spdlog::error("{}", st.error().message);

@@ -6,6 +6,7 @@
 //              [--avatar FILE] [--loop] [--duration S] [--count K] [--config FILE]
 //              [--stats-json FILE] [--log-level LEVEL] [--netsim SPEC] [--token T ...]
 //              [--tls [--tls-ca FILE | --tls-pin SHA256]]
+//              [--voice FILE.wav] [--audio-out FILE.wav] [--mute] [--no-audio]
 //   vistel-bot --version
 //
 // K participants (named N-1 .. N-K when K > 1, else N) join room R, each with the avatar
@@ -25,6 +26,10 @@
 // participant and the server on UDP (client/net/net_sim.hpp), seeded per participant.
 // --token: the join token(s) for a server that requires them (`vistel-server token`), one
 // per participant in name order (a token admits one name).
+// --voice FILE.wav: every participant speaks the file (client/voice/voice_engine.hpp), from
+// the moment it is live, once (or endlessly with --loop); --audio-out FILE.wav writes
+// what the first participant hears (spatialised from the seats). Bots never open audio
+// devices. --mute joins with voice muted, --no-audio without voice.
 // Never initialises GLFW. Exit status: 0, 1 on an error (a participant the server refused
 // or dropped included: the refusal is printed), 2 on bad usage (an unknown --log-level too).
 
@@ -42,6 +47,7 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "client/bot/bot_report.hpp"
 #include "client/bot/recording_input.hpp"
@@ -52,6 +58,8 @@
 #include "client/net/net_driver.hpp"
 #include "client/net/playback_stats.hpp"
 #include "client/net/tls_options.hpp"
+#include "client/voice/voice_engine.hpp"
+#include "client/voice/voice_scene.hpp"
 #include "common/avatar/avatar_io.hpp"
 #include "common/base/file.hpp"
 #include "common/motion/bvh.hpp"
@@ -98,6 +106,18 @@ int main(int argc, char** argv) {
   app.add_option("--config", config_path, "client settings (TOML); built-in defaults if absent");
   app.add_option("--stats-json", stats_path,
                  "write each participant's join time, bytes and latency as JSON at the end");
+  VoiceOptions voice_options;
+  bool no_audio = false;
+  app.add_option("--voice,--audio-in", voice_options.audio_in,
+                 "audio file (WAV) every participant speaks once live (endlessly with --loop)");
+  app.add_option("--audio-out", voice_options.audio_out,
+                 "write what the first participant hears to this WAV file (stereo, 48 kHz)");
+  int voice_kbps = 24;
+  app.add_option("--voice-kbps", voice_kbps,
+                 "Opus bitrate of the own voice, 16..32 kbit/s (default 24)")
+      ->check(CLI::Range(16, 32));
+  app.add_flag("--mute", voice_options.muted, "join with the voice muted");
+  app.add_flag("--no-audio", no_audio, "no voice at all");
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error, off (default: info)");
   std::string netsim_text;
@@ -226,9 +246,31 @@ int main(int argc, char** argv) {
     if (!tokens.empty()) settings.token = tokens[static_cast<std::size_t>(i)];
     drivers.push_back(NetDriver::create(io, *server, settings, nullptr, {}, tls_settings));
     drivers.back()->setNetSim(*netsim);
-    drivers.back()->start();
   }
+  voice_options.opus.bitrate_bps = 1000 * voice_kbps;
+  // Voice: an engine per speaking participant (and for the first one's ears with
+  // --audio-out); files only, never devices.
+  std::vector<std::unique_ptr<VoiceEngine>> voices(drivers.size());
+  if (!no_audio) {
+    for (std::size_t i = 0; i < drivers.size(); ++i) {
+      VoiceOptions options = voice_options;
+      options.capture = !options.audio_in.empty();
+      options.playback = i == 0 && !options.audio_out.empty();
+      if (!options.capture && !options.playback) continue;
+      if (i > 0) options.audio_out.clear();
+      options.loop_input = loop;
+      options.label = "vistel-bot: " + names[i] + ": voice";
+      auto started = VoiceEngine::start(drivers[i], options);
+      if (!started) {
+        spdlog::error("{}", started.error().message);
+        return 1;
+      }
+      voices[i] = std::move(*started);
+    }
+  }
+  for (auto& driver : drivers) driver->start();
   std::thread network([&io] { io.run(); });
+  VoiceScene voice_scene;  // the first participant's ears: heads above the seats
 
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
@@ -288,6 +330,19 @@ int main(int argc, char** argv) {
       });
     }
     if (open == 0) break;
+    if (voices[0]) {
+      voice_scene.begin();
+      drivers[0]->withSession([&](const ClientSession& s, double) {
+        for (const auto& m : s.members()) {
+          const glm::mat4 placement =
+              glm::rotate(glm::translate(glm::mat4(1.0f), glm::vec3(m->seat.x, 0.0f, m->seat.z)),
+                          m->seat.yaw, glm::vec3(0.0f, 1.0f, 0.0f));
+          voice_scene.add(m->id, m->is_self, nullptr, nullptr, placement);
+        }
+        return 0;
+      });
+      voice_scene.commit(*voices[0]);
+    }
     ++frame;
   }
 
@@ -310,6 +365,14 @@ int main(int argc, char** argv) {
       spdlog::error("--stats-json: {}", st.error().message);
       exit_code = 1;
     }
+  }
+  for (std::size_t i = 0; i < voices.size(); ++i) {
+    if (!voices[i]) continue;
+    if (Status st = voices[i]->stop(); !st) {
+      spdlog::error("{}", st.error().message);
+      exit_code = 1;
+    }
+    std::printf("vistel-bot: %s: %s\n", names[i].c_str(), voices[i]->summary().c_str());
   }
   for (std::size_t i = 0; i < drivers.size(); ++i) {
     const std::string error = drivers[i]->error();

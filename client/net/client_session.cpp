@@ -474,6 +474,8 @@ void ClientSession::onDatagram(std::span<const std::uint8_t> sealed, double now)
     clock_.addSample(sent_at, pong.server_time, now);
   } else if (type == wire::PacketType::kSnapshot) {
     handleSnapshot(datagram, now);
+  } else if (type == wire::PacketType::kVoiceForward) {
+    handleVoice(datagram, now);
   } else {
     ++stats_.datagrams_rejected;
   }
@@ -567,6 +569,48 @@ void ClientSession::handleInteractionPart(const wire::Snapshot& snapshot) {
     ++interactions_version_;
     pending_part_count_ = 0;
   }
+}
+
+void ClientSession::handleVoice(std::span<const std::uint8_t> datagram, double now) {
+  wire::VoiceForwardPacket packet;
+  const RemoteMember* speaker = nullptr;
+  if (wire::readVoiceForward(datagram, packet)) speaker = findMember(packet.speaker_id);
+  if (speaker == nullptr || speaker->is_self) {
+    ++stats_.datagrams_rejected;
+    ++voice_.counters.rejected;
+    return;
+  }
+  last_server_datagram_ = now;
+  ++voice_.counters.received;
+  voice_.counters.bytes_received += datagram.size() + wire::kSealOverheadBytes;
+  ReceivedVoice& frame = voice_.push();
+  frame.speaker_id = packet.speaker_id;
+  frame.sequence = packet.frame.sequence;
+  frame.capture_time = packet.frame.capture_time;
+  frame.level = packet.frame.level;
+  frame.arrival = now;
+  frame.size = static_cast<std::uint16_t>(packet.payload.size());
+  std::copy(packet.payload.begin(), packet.payload.end(), frame.payload.begin());
+}
+
+bool ClientSession::sendVoice(const OutgoingVoice& frame) {
+  if (state_ != SessionState::kLive) return false;
+  wire::VoicePacket packet;
+  packet.header.member_id = member_id_;
+  packet.frame.sequence = static_cast<std::uint16_t>(voice_sequence_ + 1);
+  packet.frame.capture_time = frame.capture_time;
+  packet.frame.level = frame.level;
+  packet.payload = frame.payload;
+  std::vector<std::uint8_t>& out = outbox_.datagrams.emplace_back();
+  if (!wire::writeVoice(packet, out)) {
+    outbox_.datagrams.pop_back();
+    return false;
+  }
+  ++voice_sequence_;
+  uplink_.seal(wire::kClientHeaderBytes, out);
+  ++voice_.counters.sent;
+  voice_.counters.bytes_sent += out.size();
+  return true;
 }
 
 bool ClientSession::sendPosture(const Posture& posture, double now) {

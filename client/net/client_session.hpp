@@ -48,6 +48,7 @@
 #include "client/net/jitter_buffer.hpp"
 #include "client/net/prop_track.hpp"
 #include "client/net/session_stats.hpp"
+#include "client/net/voice_inbox.hpp"
 #include "common/anim/posture.hpp"
 #include "common/base/result.hpp"
 #include "common/deform/interactions.hpp"
@@ -200,6 +201,12 @@ class ClientSession {
   // kLive once the server holds our avatar (else false, nothing sent); false as well
   // when its joint count is not the avatar's. Allocates only the datagram.
   bool sendPosture(const Posture& posture, double now);
+  // Sends one voice frame (WIRE.md §3.10), sealed like postures. Only in kLive; false
+  // (nothing sent) otherwise or for a payload out of range. Frames received from others
+  // wait in voiceInbox().
+  bool sendVoice(const OutgoingVoice& frame);
+  VoiceInbox& voiceInbox() { return voice_; }
+  const VoiceInbox& voiceInbox() const { return voice_; }
   // Sends Leave and asks the driver to close; the state becomes kClosed.
   void leave(const std::string& reason);
   // Asks the server for a ball above our head (SpawnProp over TCP; the server rate-limits
@@ -270,6 +277,7 @@ class ClientSession {
   void handleRoster(const control::Roster& roster);
   void handleChunk(const control::AvatarChunk& chunk);
   void handleSnapshot(std::span<const std::uint8_t> datagram, double now);
+  void handleVoice(std::span<const std::uint8_t> datagram, double now);
   void handleProps(const control::Roster& roster);
   void handleInteractionPart(const wire::Snapshot& snapshot);
   // Scene index of a server body, or -1.
@@ -337,6 +345,8 @@ class ClientSession {
   Posture scratch_posture_;
   std::unique_ptr<wire::PostureDeltaEncoder> encoder_;  // our posture stream (first send)
   std::vector<std::uint8_t> scratch_record_bytes_;
+  VoiceInbox voice_;
+  std::uint16_t voice_sequence_ = 0;
 };
 
 }  // namespace vistel::net

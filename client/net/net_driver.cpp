@@ -359,6 +359,22 @@ bool NetDriver::sendPosture(const Posture& posture) {
   return sent;
 }
 
+bool NetDriver::sendVoice(const OutgoingVoice& frame) {
+  bool sent = false;
+  {
+    std::lock_guard lock(mutex_);
+    sent = session_->sendVoice(frame);
+  }
+  if (sent) asio::post(strand_, [self = shared_from_this()] { self->flush(); });
+  return sent;
+}
+
+void NetDriver::takeVoice(std::vector<ReceivedVoice>& out, VoiceCounters* counters) {
+  std::lock_guard lock(mutex_);
+  session_->voiceInbox().takeAll(out);
+  if (counters != nullptr) *counters = session_->voiceInbox().counters;
+}
+
 bool NetDriver::requestBall() {
   bool sent = false;
   {

@@ -75,6 +75,10 @@ class NetDriver : public std::enable_shared_from_this<NetDriver> {
 
   // Thread-safe calls.
   bool sendPosture(const Posture& posture);
+  // One voice frame (ClientSession::sendVoice); and the frames received since the last
+  // call, appended to out (with the voice counters, when counters is not null).
+  bool sendVoice(const OutgoingVoice& frame);
+  void takeVoice(std::vector<ReceivedVoice>& out, VoiceCounters* counters = nullptr);
   // ClientSession::requestBall (a ball above our head; the server rate-limits).
   bool requestBall();
   SessionState state() const;

@@ -45,6 +45,8 @@ std::optional<PacketType> peekPacketType(std::span<const std::uint8_t> datagram)
     case PacketType::kHelloAck:
     case PacketType::kSnapshot:
     case PacketType::kPong:
+    case PacketType::kVoice:
+    case PacketType::kVoiceForward:
       return static_cast<PacketType>(datagram[1]);
   }
   return std::nullopt;

@@ -42,12 +42,14 @@ inline constexpr std::size_t kSnapshotEntryOverhead = 4;  // member id before ea
 inline constexpr int kMaxInteractionParts = 32;           // datagrams of one tick's list
 
 enum class PacketType : std::uint8_t {
-  kHello = 0x01,     // client -> server: bind this endpoint to (member id, key)
-  kPosture = 0x02,   // client -> server: the sender's newest posture
-  kPing = 0x03,      // client -> server: clock-offset probe
-  kHelloAck = 0x81,  // server -> client: endpoint bound
-  kSnapshot = 0x82,  // server -> client: other members' newest postures, props, interactions
-  kPong = 0x83,      // server -> client: answer to a ping with the server's clock
+  kHello = 0x01,         // client -> server: bind this endpoint to (member id, key)
+  kPosture = 0x02,       // client -> server: the sender's newest posture
+  kPing = 0x03,          // client -> server: clock-offset probe
+  kVoice = 0x04,         // client -> server: one 20 ms Opus voice frame (voice_packets.hpp)
+  kHelloAck = 0x81,      // server -> client: endpoint bound
+  kSnapshot = 0x82,      // server -> client: other members' newest postures, props, interactions
+  kPong = 0x83,          // server -> client: answer to a ping with the server's clock
+  kVoiceForward = 0x84,  // server -> client: a voice frame of another member, as it sent it
 };
 
 struct ClientHeader {

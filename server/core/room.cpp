@@ -5,7 +5,15 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "common/wire/voice_packets.hpp"
+
 namespace vistel::server {
+namespace {
+
+// Where a member's head is taken to be before the server has its avatar (voice).
+constexpr float kVoiceHeadHeightM = 1.6f;
+
+}  // namespace
 
 RoomSettings roomSettings(const ServerConfig& config) {
   RoomSettings s;
@@ -23,6 +31,7 @@ RoomSettings roomSettings(const ServerConfig& config) {
   s.world.contact_window_s = static_cast<float>(config.contact_window_s);
   s.world.contact_lead_s = static_cast<float>(config.contact_lead_s);
   s.world.spawn_height_m = config.spawn_height_m;
+  s.voice = config.voice;
   return s;
 }
 
@@ -34,7 +43,8 @@ Room::Room(RoomId id, std::string name, const RoomSettings& settings, double now
       next_tick_(now + 1.0 / settings.tick_rate_hz),
       world_(settings.world),
       drops_(fmt::format("room '{}'", name_)),
-      last_update_(now) {}
+      last_update_(now),
+      voice_(settings.voice) {}
 
 Room::Member* Room::find(std::uint32_t member_id) {
   for (Member& m : members_) {
@@ -61,11 +71,14 @@ void Room::apply(const RoomCommand& c, double now) {
       members_.push_back(std::move(m));
       interest_dirty_ = true;
       world_.addMember(c.member, c.seat, c.collision);
+      voice_.addMember(c.member.value, now);
+      voice_.setHead(c.member.value, glm::vec3(c.seat.x, kVoiceHeadHeightM, c.seat.z));
       break;
     }
     case RoomCommand::Kind::kRemoveMember:
       std::erase_if(members_, [&](const Member& m) { return m.id == c.member; });
       world_.removeMember(c.member);
+      voice_.removeMember(c.member.value);
       interest_dirty_ = true;
       break;
     case RoomCommand::Kind::kBindEndpoint:
@@ -157,6 +170,8 @@ void Room::onDatagram(std::span<const std::uint8_t> datagram, const wire::Endpoi
     onPosture(datagram, from, now, fx);
   } else if (type == wire::PacketType::kPing) {
     onPing(datagram, from, now, fx);
+  } else if (type == wire::PacketType::kVoice) {
+    onVoice(datagram, from, now, fx);
   } else {
     drops_.drop(now, "unexpected datagram",
                 fmt::format("{} bytes from {}", datagram.size(), from.toString()));
@@ -286,6 +301,55 @@ void Room::onPing(std::span<const std::uint8_t> datagram, const wire::Endpoint& 
   m->out.seal(wire::kServerHeaderBytes, out.bytes);
 }
 
+void Room::onVoice(std::span<const std::uint8_t> datagram, const wire::Endpoint& from, double now,
+                   Effects& fx) {
+  if (!settings_.voice.enabled) {
+    drops_.drop(now, "voice disabled",
+                fmt::format("{} bytes from {}", datagram.size(), from.toString()));
+    return;
+  }
+  std::span<const std::uint8_t> plain;
+  Member* m = authenticate(datagram, from, now, "voice", plain);
+  if (m == nullptr) return;
+  wire::VoicePacket voice;
+  if (Status st = wire::readVoice(plain, voice); !st) {
+    drops_.drop(now, "malformed voice",
+                fmt::format("member {:#x}: {}", m->id.value, st.error().message));
+    return;
+  }
+  m->last_heard = now;
+  if (!voice_.admit(m->id.value, datagram.size(), now)) {
+    drops_.drop(now, "voice rate limit",
+                fmt::format("member {:#x}: over its voice frame or byte rate", m->id.value));
+    return;
+  }
+  voice_.route(m->id.value, voice.frame.level, now, scratch_listeners_);
+  if (scratch_listeners_.empty()) return;
+  // The forward's plain bytes once; each recipient gets them sealed with its own key.
+  wire::VoiceForwardPacket forward;
+  forward.speaker_id = m->id.value;
+  forward.frame = voice.frame;
+  forward.payload = voice.payload;
+  scratch_forward_.clear();
+  if (!wire::writeVoiceForward(forward, scratch_forward_)) return;  // readVoice checked it
+  for (std::uint32_t id : scratch_listeners_) {
+    Member* to = find(id);
+    if (to == nullptr || !to->bound) continue;
+    OutDatagram& out = fx.datagrams.emplace_back();
+    out.to = to->endpoint;
+    out.bytes.reserve(wire::kMaxDatagramBytes);
+    out.bytes.assign(scratch_forward_.begin(), scratch_forward_.end());
+    to->out.seal(wire::kServerHeaderBytes, out.bytes);
+  }
+}
+
+void Room::updateVoiceHeads() {
+  for (const Member& m : members_) {
+    const auto head = world_.headPosition(m.id);
+    voice_.setHead(m.id.value, head ? *head : glm::vec3(m.seat.x, kVoiceHeadHeightM, m.seat.y));
+  }
+}
+
 double Room::nextWakeTime() const {
   return forward_pending_ ? std::min(next_tick_, next_forward_) : next_tick_;
 }
@@ -321,6 +385,7 @@ void Room::update(double now, Effects& fx) {
   ++tick_;
   world_.step(last_tick_time_ < 0.0 ? tick_interval_ : now - last_tick_time_);
   last_tick_time_ = now;
+  updateVoiceHeads();
   sendWorld(now, fx);
   next_tick_ += tick_interval_;
   if (next_tick_ <= now) next_tick_ = now + tick_interval_;

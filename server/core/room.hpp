@@ -33,6 +33,7 @@
 #include "server/core/effects.hpp"
 #include "server/core/room_world.hpp"
 #include "server/core/server_config.hpp"
+#include "server/core/voice_forwarding.hpp"
 
 namespace vistel::server {
 
@@ -44,6 +45,7 @@ struct RoomSettings {
   int near_members = 16;              // heard at full rate (and the size of each rate band)
   int max_rate_divisor = 4;           // the farthest are heard at 1 / this of their rate
   WorldSettings world;
+  VoiceSettings voice;  // selective forwarding of voice frames (voice_forwarding.hpp)
 };
 
 // The room settings a server configuration asks for.
@@ -65,6 +67,8 @@ class Room {
   // Delta-coded postures whose reference the room did not hold (a keyframe is then asked
   // for): normal after a lost datagram.
   std::uint64_t posturesWithoutReference() const { return postures_without_reference_; }
+  // Voice frames admitted, forwarded (copies), refused by the rate limits, and so on.
+  const VoiceForwardingStats& voiceStats() const { return voice_.stats(); }
 
   // Mirrors a lobby decision (add/remove/bind/set avatar); commands for other rooms or
   // unknown members are ignored.
@@ -140,6 +144,12 @@ class Room {
                  Effects& fx);
   void onPing(std::span<const std::uint8_t> datagram, const wire::Endpoint& from, double now,
               Effects& fx);
+  // A voice frame (WIRE.md §3.10): authenticated, rate-limited, then sealed on to the
+  // listeners VoiceForwarding picks.
+  void onVoice(std::span<const std::uint8_t> datagram, const wire::Endpoint& from, double now,
+               Effects& fx);
+  // Every member's head for voice forwarding (at each tick, after the world's step).
+  void updateVoiceHeads();
   // Common checks of a client datagram: a known member at its bound endpoint, sealed with
   // its key under a fresh counter. On success `plain` is the opened plain layout (in a
   // scratch buffer, valid until the next call); logs, counts and returns nullptr on failure.
@@ -178,6 +188,9 @@ class Room {
   // Reused per datagram, so steady state allocates nothing.
   wire::PostureRecord scratch_record_;
   std::vector<std::uint8_t> scratch_datagram_;  // a datagram being opened
+  VoiceForwarding voice_;
+  std::vector<std::uint32_t> scratch_listeners_;  // a voice frame's recipients
+  std::vector<std::uint8_t> scratch_forward_;     // its VoiceForward, plain
 };
 
 }  // namespace vistel::server

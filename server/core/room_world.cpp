@@ -95,6 +95,14 @@ std::optional<glm::vec3> RoomWorld::spawnPointAbove(MemberId id) {
          settings_.spawn_forward_m * forward;
 }
 
+std::optional<glm::vec3> RoomWorld::headPosition(MemberId id) {
+  MemberBody* m = findMember(id);
+  if (m == nullptr || !m->model) return std::nullopt;
+  poseMemberSkeleton(*m);
+  const auto head = static_cast<std::size_t>(m->model->head_joint);
+  return glm::vec3(m->placement * m->joint_model[head][3]);
+}
+
 // ---------------------------------------------------------------- props
 
 bool RoomWorld::addProp(PropId id, const PropSpec& spec, const glm::vec3& position,

@@ -114,6 +114,9 @@ class RoomWorld {
   // newest posture, else at rest) and a little in front; nullopt for an unknown member or
   // one whose avatar the server does not have yet.
   std::optional<glm::vec3> spawnPointAbove(MemberId id);
+  // The member's head joint in room space (newest posture, else at rest); nullopt for an
+  // unknown member or one whose avatar the server does not have yet (voice forwarding).
+  std::optional<glm::vec3> headPosition(MemberId id);
 
   // One tick of dt seconds (clamped to (0, 0.1]): pose, step props, Step 1, world parts.
   void step(double dt);

@@ -79,7 +79,8 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
   for (const auto& [key, node] : root) {
     // [web] is read by server/web (parseWebConfig).
     static const std::set<std::string, std::less<>> kSections = {
-        "network", "session", "limits", "room", "log", "world", "props", "auth", "tls", "web"};
+        "network", "session", "limits", "room", "log",  "world",
+        "props",   "auth",    "tls",    "web",  "voice"};
     if (key.str() == "prop" && node.is_array_of_tables()) continue;
     if (!kSections.count(key.str()) || !node.is_table()) {
       return fail("{}: unknown section or key '{}'", source_name, key.str());
@@ -203,6 +204,17 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
                   c.room_props.size(), c.max_props_per_room);
     }
   }
+
+  ConfigTable voice(root, "voice", source_name);
+  VISTEL_TRY(voice.boolean("enabled", c.voice.enabled));
+  VISTEL_TRY(voice.number("hearing_radius_m", c.voice.hearing_radius_m, 0.1, 1000));
+  VISTEL_TRY(voice.number("max_speakers", c.voice.max_speakers, 0, 64));
+  VISTEL_TRY(voice.number("hold_s", c.voice.hold_s, 0, 10));
+  VISTEL_TRY(voice.number("silence_s", c.voice.silence_s, 0.02, 10));
+  VISTEL_TRY(voice.number("max_frames_per_s", c.voice.max_frames_per_s, 1, 1000));
+  VISTEL_TRY(voice.number("max_frames_burst", c.voice.max_frames_burst, 1, 1000));
+  VISTEL_TRY(voice.number("max_bytes_per_s", c.voice.max_bytes_per_s, 100, 1e7));
+  VISTEL_TRY(voice.checkUnknown());
 
   ConfigTable auth(root, "auth", source_name);
   VISTEL_TRY(auth.string("secret_file", c.secret_file));

@@ -15,6 +15,7 @@
 #include "common/base/result.hpp"
 #include "common/scene/seat_layout.hpp"
 #include "server/core/props.hpp"
+#include "server/core/voice_forwarding.hpp"
 
 namespace vistel::server {
 
@@ -92,6 +93,8 @@ struct ServerConfig {
   PropSpec spawn_ball;            // the ball a client's spawn request makes
   // [[prop]]
   std::vector<RoomPropConfig> room_props;  // every room starts with these
+  // [voice] (proto/SESSION.md §3 "Voice"): selective forwarding and per-member limits.
+  VoiceSettings voice;
   // [log]
   std::string log_level = "info";  // trace, debug, info, warn, error
   // [auth] (proto/SESSION.md §2.3): with a secret every Join needs a token signed by it.

@@ -40,7 +40,8 @@ DatagramRoute routeDatagram(std::span<const std::uint8_t> datagram, const RoomRo
       route.target = DatagramRoute::Target::kLobby;
       return route;
     case wire::PacketType::kPosture:
-    case wire::PacketType::kPing: {
+    case wire::PacketType::kPing:
+    case wire::PacketType::kVoice: {
       const auto member = wire::peekMemberId(datagram);
       const auto room = member ? router.roomOf(*member) : std::nullopt;
       if (!room) {

@@ -59,6 +59,9 @@ DropClass classifyDropReason(std::string_view reason) {
       {"invalid counter", DropClass::kReplay},
       {"capture time too old", DropClass::kBadPayload},
       {"sequence jump", DropClass::kBadPayload},
+      // Voice (proto/WIRE.md §3.10); "voice rate limit" is a rate drop by its name.
+      {"malformed voice", DropClass::kBadPayload},
+      {"voice disabled", DropClass::kBadPayload},
   };
   for (const Entry& e : kTable) {
     if (e.phrase == reason) return e.cls;

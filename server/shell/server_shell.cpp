@@ -80,6 +80,7 @@ struct ServerShell::RoomHost {
   Effects fx;  // its strand only; reused so that ticks allocate nothing once warm
   bool closed = false;
   std::map<std::string, std::uint64_t, std::less<>> drops_seen;  // room.drops() counted so far
+  VoiceForwardingStats voice_seen;                               // room.voiceStats() counted so far
   std::uint64_t timer_generation = 0;  // a wait that is not the newest does nothing
   double armed_for = 0.0;              // server time the newest wait ends
 };
@@ -618,6 +619,7 @@ void ServerShell::onDatagram(std::shared_ptr<std::vector<std::uint8_t>> bytes,
           const std::uint64_t dropped = host->room.drops().total();
           host->room.onDatagram(*bytes, from, now(), host->fx);
           if (host->room.drops().total() != dropped) countRoomDrops(*host);
+          if (host->room.voiceStats().frames != host->voice_seen.frames) countRoomVoice(*host);
           applyRoomEffects(host->fx);
         });
         // A posture left waiting for its batch: wake up for it.
@@ -650,6 +652,16 @@ void ServerShell::syncLobbyDrops(bool hello) {
     it->second = count;
   }
   lobby_drops_total_ = lobby_.drops().total();
+}
+
+void ServerShell::countRoomVoice(RoomHost& host) {
+  const VoiceForwardingStats& now_seen = host.room.voiceStats();
+  VoiceForwardingStats& was = host.voice_seen;
+  voice_frames_ += now_seen.frames - was.frames;
+  voice_forwarded_ += now_seen.forwarded - was.forwarded;
+  voice_out_of_range_ += now_seen.out_of_range - was.out_of_range;
+  voice_not_selected_ += now_seen.not_selected - was.not_selected;
+  was = now_seen;
 }
 
 void ServerShell::countRoomDrops(RoomHost& host) {
@@ -690,6 +702,27 @@ void ServerShell::collectMetrics(std::function<void(std::string)> reply, bool re
     }
     // ... and the connections refused at accept.
     for (const auto& [reason, count] : limits_.refusals()) s.connections_dropped[reason] = count;
+    // Voice (refused frames are in vistel_datagrams_dropped_total: "voice rate limit", ...).
+    auto counter = [&](std::string name, std::string help, MetricLabels labels, double value) {
+      MetricFamily& f = s.extra.emplace_back();
+      f.name = std::move(name);
+      f.help = std::move(help);
+      f.type = MetricType::kCounter;
+      f.samples.push_back({std::move(labels), value, {}});
+      return &f;
+    };
+    counter("vistel_voice_frames_total", "Voice frames admitted for forwarding, all rooms", {},
+            static_cast<double>(voice_frames_.load()));
+    counter("vistel_voice_forwarded_total",
+            "Voice frame copies forwarded (one per frame and listener)", {},
+            static_cast<double>(voice_forwarded_.load()));
+    MetricFamily* skipped = counter(
+        "vistel_voice_skipped_total",
+        "Voice (frame, listener) pairs not forwarded: beyond the hearing radius, or the speaker "
+        "not among the listener's max_speakers",
+        {{"reason", "out_of_range"}}, static_cast<double>(voice_out_of_range_.load()));
+    skipped->samples.push_back(
+        {{{"reason", "not_selected"}}, static_cast<double>(voice_not_selected_.load()), {}});
     reply(formatMetrics(s));
   });
 }

@@ -122,6 +122,8 @@ class ServerShell {
   // Brings lobby_drops_seen_ up to the lobby's counts; with `hello`, what grew was dropped
   // while handling a hello datagram: counted as datagram drops (lobby strand).
   void syncLobbyDrops(bool hello);
+  // Adds what a room's voice forwarding did since the last look to the totals (room strand).
+  void countRoomVoice(RoomHost& host);
   // Counts what a room's last datagram made it drop (room strand).
   void countRoomDrops(RoomHost& host);
   // Carries out what a core asked for. Lobby effects run on the lobby strand; room
@@ -164,6 +166,13 @@ class ServerShell {
   mutable std::mutex rooms_mutex_;  // router_ and rooms_
   RoomRouter router_;
   std::unordered_map<std::uint32_t, std::shared_ptr<RoomHost>> rooms_;
+
+  // Voice forwarding, all rooms (room strands add, the metrics read): frames admitted,
+  // copies forwarded, (frame, listener) pairs skipped out of range or not selected.
+  std::atomic<std::uint64_t> voice_frames_{0};
+  std::atomic<std::uint64_t> voice_forwarded_{0};
+  std::atomic<std::uint64_t> voice_out_of_range_{0};
+  std::atomic<std::uint64_t> voice_not_selected_{0};
 
   std::function<void(const std::string&)> room_closed_;
   std::uint16_t port_ = 0;

@@ -1,0 +1,141 @@
+// A participant's voice (issue 22, proto/VOICE.md): capture -> voice activity -> Opus ->
+// the session's UDP, and the session's voice frames -> a playout buffer per speaker ->
+// decode / FEC / concealment -> spatialiser -> mixer -> speakers or a WAV file.
+//
+// The engine runs its own thread on a 20 ms grid of the steady clock. Each tick it
+//  1. takes one 20 ms frame of input (a WAV file read at real-time pace, or the default
+//     microphone through PortAudio), and unless muted runs it through VoiceActivity (and
+//     speexdsp's noise suppression for a microphone) and, while speech lasts, encodes it
+//     (Opus, 20 ms, in-band FEC, 16..32 kbit/s) and sends it (NetDriver::sendVoice);
+//  2. takes the frames the session received and pushes each into its speaker's
+//     SpeakerPlayout with its arrival time;
+//  3. pulls one frame per speaker, spatialises it from the speaker's head relative to the
+//     listener's head and facing (setScene), mixes and limits, and writes the stereo frame
+//     to the speakers or appends it to the output file (written at stop()).
+//
+// Capture clock: a frame's capture time is the server clock (the session's ClockSync
+// estimate) at its first sample, in samples at 48 kHz, anchored at the start of each
+// talkspurt and counted in frames within one (a frame read at tick t was captured during
+// the 20 ms before t). Listeners use it only for their playout buffer's offsets (any sender
+// clock would do) and to measure mouth-to-ear latency: the server time at which a frame
+// leaves the listener's 20 ms output buffer minus its capture time (so capture framing,
+// network, playout buffer and device buffer are all in it). A file input starts once the
+// session is live and its clock has converged (3 pongs), so its first sample is sent.
+//
+// Devices: with no file given, the default PortAudio device for that direction; when
+// there is none, the engine says so once and goes on without it (silent). Threads: every
+// public call is thread-safe.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <span>
+#include <string>
+#include <thread>
+#include <unordered_map>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "client/net/net_driver.hpp"
+#include "common/base/result.hpp"
+#include "common/voice/opus_voice.hpp"
+#include "common/voice/spatialiser.hpp"
+
+namespace vistel {
+
+struct VoiceOptions {
+  std::string audio_in;         // a WAV (any libsndfile file) instead of the microphone
+  std::string audio_out;        // a stereo 16-bit WAV written at stop() instead of the speakers
+  bool capture = true;          // send the own voice (false: listen only)
+  bool playback = true;         // play the others (false: speak only)
+  bool muted = false;           // start muted (setMuted / toggleMute)
+  bool loop_input = false;      // a file input starts over at its end (else it ends in silence)
+  bool vad = true;              // send only speech (VoiceActivity); false: every frame
+  bool denoise = true;          // speexdsp noise suppression on a microphone (never on a file)
+  OpusVoiceSettings opus;       // 24 kbit/s, FEC, 10% loss hint by default
+  std::string label = "voice";  // names log lines
+};
+
+// Where a speaker is: its head in room space (metres).
+struct SpeakerSpot {
+  std::uint32_t id = 0;
+  glm::vec3 head{0.0f};
+};
+
+// One speaker as this listener last heard it.
+struct SpeakerReport {
+  std::uint32_t id = 0;
+  glm::vec3 head_space{0.0f};  // its head in the listener's head space (+X left, +Z ahead), m
+  std::int64_t decoded = 0, fec = 0, concealed = 0, late = 0;
+  std::int64_t target_delay_ms = 0;  // the playout buffer's jitter delay
+};
+
+struct VoiceReport {
+  std::uint64_t frames_captured = 0;  // input frames read
+  std::uint64_t frames_sent = 0;
+  std::uint64_t bytes_sent = 0;  // sealed datagram bytes
+  std::uint64_t frames_received = 0;
+  std::uint64_t bytes_received = 0;
+  std::uint64_t frames_rejected = 0;
+  int speakers = 0;  // heard so far
+  std::int64_t decoded = 0, fec = 0, concealed = 0, late = 0, dropped = 0, inserted = 0;
+  std::int64_t decode_errors = 0;
+  std::uint64_t ticks = 0;
+  std::uint64_t late_ticks = 0;         // ticks run more than 10 ms after their time
+  std::vector<double> mouth_to_ear_ms;  // one per decoded/FEC frame (bounded)
+  double seconds_written = 0.0;         // to audio_out
+  double sent_kbps = 0.0;               // sealed datagrams while speaking (frames_sent * 20 ms)
+  double payload_kbps = 0.0;            // the Opus payload alone, while speaking
+  std::uint64_t payload_bytes_sent = 0;
+  std::vector<SpeakerReport> heard;  // speakers still known, by id
+};
+
+class VoiceEngine {
+ public:
+  // Starts the thread. Errors: an unreadable audio_in, an Opus or speexdsp failure. A
+  // missing device is not an error (see above).
+  static Result<std::unique_ptr<VoiceEngine>> start(std::shared_ptr<net::NetDriver> driver,
+                                                    const VoiceOptions& options);
+  ~VoiceEngine();
+  VoiceEngine(const VoiceEngine&) = delete;
+  VoiceEngine& operator=(const VoiceEngine&) = delete;
+
+  void setMuted(bool muted) { muted_ = muted; }
+  bool muted() const { return muted_; }
+  void toggleMute() { muted_ = !muted_; }
+
+  // The listener's head and the speakers' heads (room space), as of the latest frame.
+  // Speakers without a spot are heard 1 m in front of the listener.
+  void setScene(const HeadPose& listener, std::span<const SpeakerSpot> speakers);
+  // The RMS (linear, 0..1) of what a speaker is heard saying in the frame audible now (the
+  // frame written, or with speakers the one written as many ticks ago as are queued before
+  // them): 0 when silent or unknown. Lip sync follows it.
+  float speakingLevel(std::uint32_t id) const;
+
+  // Stops the thread and writes audio_out (if given). Idempotent.
+  Status stop();
+  VoiceReport report() const;
+  // One line (no newline), and the report as a JSON object.
+  std::string summary() const;
+  std::string json() const;
+
+ private:
+  struct Speaker;
+  struct Impl;
+  VoiceEngine() = default;
+  void run();
+
+  std::unique_ptr<Impl> impl_;
+  std::atomic<bool> muted_{false};
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+  bool stopped_ = false;
+};
+
+// p-th percentile (0..100) of values (copied and sorted); 0 for none.
+double voicePercentile(std::vector<double> values, double p);
+
+}  // namespace vistel
