@@ -1,7 +1,9 @@
 // bench_posture: for every clip under <shared data>/mocap (../shared/data, or
 // $VISTEL_SHARED_DATA), the clip's own skeleton wears the simulated four trackers (default
-// FASTRAK-like noise, 4 ms latency, 120 Hz shared by the stations; and a noiseless run for
-// reference), the solver calibrates on the first pose and solves every tick, and the
+// FASTRAK-like noise, 4 ms latency, 120 Hz shared by the stations; a noiseless run for
+// reference; and the earlier pipeline, One-Euro stations without the trunk prior, with noise
+// for comparison); the solver runs through the calibration hold, calibrates on it and solves
+// every tick, and the
 // solved motion is scored against the clip at the clip's frames:
 //   mpjpe_upper_cm  mean joint position error over spine, neck, head, shoulders, elbows,
 //                   wrists (target <= 2 cm with default noise on the gesture clips)
@@ -50,7 +52,7 @@ std::map<std::string, std::unique_ptr<ClipBody>>& bodies() {
   return cache;
 }
 
-void benchClip(benchmark::State& state, const std::string& path, bool noise) {
+void benchClip(benchmark::State& state, const std::string& path, bool noise, bool one_euro) {
   auto& cache = bodies();
   if (!cache.count(path)) {
     Result<ClipBody> body = loadClipBody(path);
@@ -65,6 +67,11 @@ void benchClip(benchmark::State& state, const std::string& path, bool noise) {
   if (!noise) {
     options.sim.position_noise_m = 0.0f;
     options.sim.orientation_noise_deg = 0.0f;
+  }
+  if (one_euro) {
+    // The earlier pipeline, for comparison: One-Euro stations, no trunk prior.
+    options.solver.filter_kind = StationFilterKind::kOneEuro;
+    options.solver.hips_cutoff_hz = 0.0f;
   }
   Result<SimulatedClip> sim = simulateClip(body, options);
   if (!sim) {
@@ -86,6 +93,7 @@ void benchClip(benchmark::State& state, const std::string& path, bool noise) {
   }
   std::vector<Posture> solved(static_cast<std::size_t>(body.clip.frame_count));
   Posture posture;
+  for (const SensorFrame& frame : sim->calibration) solver->solve(frame, posture);  // warm-up
   int filled = 0;
   for (std::size_t i = 0; i < sim->frames.size(); ++i) {
     solver->solve(sim->frames[i], posture);
@@ -147,11 +155,17 @@ int main(int argc, char** argv) {
   }
   for (const fs::path& clip : clips) {
     const std::string name = clip.parent_path().filename().string() + "/" + clip.stem().string();
-    for (bool noise : {true, false}) {
+    // The default station filter (Kalman) with and without noise; the One-Euro filter with
+    // noise for comparison.
+    for (int variant = 0; variant < 3; ++variant) {
+      const bool noise = variant != 1;
+      const bool one_euro = variant == 2;
       benchmark::RegisterBenchmark(
-          fmt::format("posture/{}/noise:{}", name, noise ? "default" : "none").c_str(),
-          [path = clip.string(), noise](benchmark::State& state) {
-            vistel::benchClip(state, path, noise);
+          fmt::format("posture/{}/noise:{}{}", name, noise ? "default" : "none",
+                      one_euro ? "/filter:one_euro" : "")
+              .c_str(),
+          [path = clip.string(), noise, one_euro](benchmark::State& state) {
+            vistel::benchClip(state, path, noise, one_euro);
           })
           ->Unit(benchmark::kMicrosecond);
     }

@@ -92,6 +92,9 @@ Result<ClipSolveResult> solveClip(const ClipBody& body, const ClipSolveOptions& 
   out.calibration = std::move(*cal);
   out.postures.resize(static_cast<std::size_t>(body.clip.frame_count));
   Posture posture;
+  // The solver runs while the participant holds still for calibration (as it does live), so
+  // its filters have settled when the clip starts moving.
+  for (const SensorFrame& frame : sim->calibration) solver->solve(frame, posture);
   int filled = 0;
   for (std::size_t i = 0; i < sim->frames.size(); ++i) {
     solver->solve(sim->frames[i], posture);

@@ -282,6 +282,18 @@ Result<PostureSolver> PostureSolver::create(const Skeleton& skeleton, const Join
     leg.foot_from_hips_c = pf - s.pos_c_[static_cast<std::size_t>(s.hips_)];
   }
 
+  // From each sensor to its segment's joint, sensor frame, tracker units.
+  for (int st = 0; st < kBodySiteCount; ++st) {
+    const StationCalibration& c = s.stations_[static_cast<std::size_t>(st)];
+    const BodyProportions& pr = s.calibration_.proportions;
+    const float scale = st == static_cast<int>(BodySite::kHead)         ? pr.torso
+                        : st == static_cast<int>(BodySite::kLeftWrist)  ? pr.arm[0]
+                        : st == static_cast<int>(BodySite::kRightWrist) ? pr.arm[1]
+                                                                        : 1.0f;
+    s.pivot_[static_cast<std::size_t>(st)] =
+        c.calibrated ? -(c.sensor_to_segment * c.offset) * scale : glm::vec3(0.0f);
+  }
+
   s.world_.resize(nn);
   s.pos_.resize(nn);
   s.reset();
@@ -293,6 +305,7 @@ void PostureSolver::reset() {
   first_ = true;
   last_time_ = 0.0;
   chest_yaw_ = prev_yaw_raw_ = pelvis_yaw_ = 0.0f;
+  hips_init_ = false;
   for (Leg& leg : legs_) {
     leg.planted = false;
     leg.stepping = false;
@@ -317,6 +330,11 @@ bool PostureSolver::trackStation(int site, const SensorFrame& frame, glm::vec3& 
   const bool fresh = usable && (!tr.seen || r.time > tr.sample_time);
   const OneEuroParams& pf = options_.position_filter;
   const OneEuroParams& qf = options_.orientation_filter;
+  const bool kalman = options_.filter && options_.filter_kind == StationFilterKind::kKalman;
+  const StationFilterParams& fp = options_.station_filters[static_cast<std::size_t>(site)];
+  // The Kalman filter runs on a point of the segment (the pivot, sensor frame): the joint the
+  // segment turns about moves least, so a rotation's prediction error swings less there.
+  const glm::vec3 pivot = pivot_[static_cast<std::size_t>(site)] * fp.pivot;
   if (fresh) {
     if (tr.lost) {
       // Back after a dropout: restart the filters on the new reading and blend from the
@@ -325,6 +343,9 @@ bool PostureSolver::trackStation(int site, const SensorFrame& frame, glm::vec3& 
       tr.rotation.reset();
       tr.position.update(r.position, 0.0f, pf);
       tr.rotation.update(r.orientation, 0.0f, qf);
+      tr.kalman.reset();
+      if (kalman)
+        tr.kalman.update(r.position + r.orientation * pivot, r.orientation, r.time, frame.time, fp);
       tr.blending = true;
       tr.blend_t0 = frame.time;
       tr.blend_dp = tr.out_p - r.position;
@@ -333,8 +354,12 @@ bool PostureSolver::trackStation(int site, const SensorFrame& frame, glm::vec3& 
     } else {
       const float dt =
           tr.seen && options_.filter ? static_cast<float>(r.time - tr.sample_time) : 0.0f;
-      tr.position.update(r.position, dt, pf);
-      tr.rotation.update(r.orientation, dt, qf);
+      if (kalman) {
+        tr.kalman.update(r.position + r.orientation * pivot, r.orientation, r.time, frame.time, fp);
+      } else {
+        tr.position.update(r.position, dt, pf);
+        tr.rotation.update(r.orientation, dt, qf);
+      }
     }
     tr.sample_time = r.time;
     tr.seen = true;
@@ -345,8 +370,12 @@ bool PostureSolver::trackStation(int site, const SensorFrame& frame, glm::vec3& 
     tr.lost_at = frame.time;
     tr.lost_p = tr.out_p;
     tr.lost_q = tr.out_q;
-    tr.hold_v = options_.predict ? tr.position.velocity() : glm::vec3(0.0f);
-    tr.hold_w = options_.predict ? tr.rotation.angularVelocity() : glm::vec3(0.0f);
+    tr.hold_v = !options_.predict ? glm::vec3(0.0f)
+                : kalman          ? tr.kalman.velocity()
+                                  : tr.position.velocity();
+    tr.hold_w = !options_.predict ? glm::vec3(0.0f)
+                : kalman          ? tr.kalman.angularVelocity()
+                                  : tr.rotation.angularVelocity();
     tr.blending = false;
   }
   if (tr.lost) {
@@ -356,6 +385,13 @@ bool PostureSolver::trackStation(int site, const SensorFrame& frame, glm::vec3& 
     const float reach = th > 0.0f ? th * (1.0f - std::exp(-tau / th)) : 0.0f;
     p = tr.lost_p + tr.hold_v * reach;
     q = glm::normalize(fromRotationVector(tr.hold_w * reach) * tr.lost_q);
+  } else if (kalman) {
+    if (options_.predict) {
+      tr.kalman.evaluate(frame.time, fp, p, q);
+    } else {
+      tr.kalman.current(p, q);
+    }
+    p -= q * pivot;
   } else {
     p = tr.position.value();
     q = tr.rotation.value();
@@ -369,6 +405,8 @@ bool PostureSolver::trackStation(int site, const SensorFrame& frame, glm::vec3& 
       p += tr.position.velocity() * ahead_p;
       q = glm::normalize(fromRotationVector(tr.rotation.angularVelocity() * ahead_q) * q);
     }
+  }
+  if (!tr.lost) {
     if (tr.blending) {
       const float u = static_cast<float>((frame.time - tr.blend_t0) / options_.blend_back_s);
       if (u >= 1.0f) {
@@ -432,7 +470,7 @@ void PostureSolver::solveArm(int side, const SensorFrame& frame, bool wrist_avai
   const glm::vec3 fore_axis = glm::normalize(wrist - p_forearm);
   const float sensor_bend = glm::length(glm::cross(to_elbow, fore_axis));
   const float w_ik =
-      smoothstep(std::sin(glm::radians(10.0f)), std::sin(glm::radians(25.0f)), sensor_bend);
+      smoothstep(std::sin(glm::radians(5.0f)), std::sin(glm::radians(35.0f)), sensor_bend);
   const glm::vec3 elbow_direct = shoulder + to_elbow * arm.upper_len;
   const glm::vec3 elbow = glm::mix(elbow_direct, elbow_ik, w_ik);
   const glm::vec3 d1 = glm::normalize(elbow - shoulder);
@@ -583,6 +621,15 @@ void PostureSolver::compose(const glm::vec3& hips_position, Posture& out) {
   }
   propagate(hips_position);
   out.root_translation = pos_[0];
+  // A skeleton whose root is a joint above the hips (a mocap clip's floor origin) with
+  // per-joint translations: the root stays where it was at calibration and the hips' own
+  // translation carries the body, as in the clip.
+  if (hips_ > 0 && skeleton_.parents[static_cast<std::size_t>(hips_)] == 0 && !driven_[0] &&
+      out.translations.size() == static_cast<std::size_t>(n_)) {
+    out.root_translation = calibration_.posture.root_translation;
+    out.translations[static_cast<std::size_t>(hips_)] =
+        glm::inverse(world_[0]) * (pos_[static_cast<std::size_t>(hips_)] - pos_c_[0]);
+  }
 }
 
 void PostureSolver::solve(const SensorFrame& frame, Posture& out) {
@@ -623,7 +670,7 @@ void PostureSolver::solve(const SensorFrame& frame, Posture& out) {
   const std::size_t H = static_cast<std::size_t>(hips_);
   const glm::quat chest_delta =
       have[ci] ? normalizeSafe(seg_w[ci] * glm::inverse(world_c_[C])) : kIdentity;
-  const glm::vec3 chest_pos = have[ci] ? seg_p[ci] : pos_c_[C];
+  glm::vec3 chest_pos = have[ci] ? seg_p[ci] : pos_c_[C];
   glm::quat swing, twist;
   swingTwist(chest_delta, kUp, swing, twist);
   const float yaw_raw = twistAngle(twist, kUp);
@@ -652,6 +699,28 @@ void PostureSolver::solve(const SensorFrame& frame, Posture& out) {
   for (int j : trunk_path_) {
     const std::size_t u = static_cast<std::size_t>(j);
     hips_pos -= world_[static_cast<std::size_t>(skeleton_.parents[u])] * offset_[u];
+  }
+  // The trunk's prior: the hips move slowly (a bow turns the trunk about them), so their
+  // position is smoothed (constant-velocity Kalman filter, the corner rising with their speed)
+  // while the chest's rotation, which carries the bow, is not; the chest follows the hips.
+  if (options_.filter && options_.hips_cutoff_hz > 0.0f && have[ci]) {
+    if (!hips_init_ || dt <= 0.0f) {
+      if (!hips_init_) hips_kf_.init(glm::dvec3(hips_pos), 1.0, 0.0, 0.0);
+      hips_init_ = true;
+      hips_speed_ = 0.0;
+    } else {
+      // (At most 8 Hz: a noisy speed would feed back into the corner.)
+      const double w =
+          6.283185307179586 * std::min(options_.hips_cutoff_hz + options_.hips_beta * hips_speed_,
+                                       std::max(8.0, static_cast<double>(options_.hips_cutoff_hz)));
+      hips_kf_.predict(dt, dt * w * w * w * w, false);
+      hips_kf_.correct(glm::dvec3(hips_pos) - hips_kf_.value(), 1.0);
+      hips_speed_ += (glm::length(hips_kf_.velocity()) - hips_speed_) *
+                     (1.0 - std::exp(-6.283185307179586 * dt));
+    }
+    const glm::vec3 smoothed(hips_kf_.value());
+    chest_pos += smoothed - hips_pos;
+    hips_pos = smoothed;
   }
 
   // Head and neck.

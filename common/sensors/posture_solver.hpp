@@ -2,14 +2,19 @@
 // (DESIGN.md §5). Works on any skeleton through its JointRoles (a clip's or an avatar's).
 //
 // Per frame, in model space (metres, +Y up):
-//  - stations: One-Euro filtered (Casiez et al. 2012), predicted forward to the frame time
-//    from the filtered velocity (covers latency and a shared update rate); a station that
+//  - stations: filtered in sensor space before the solve and predicted forward to the frame
+//    time (covers latency and a shared update rate): by default a Kalman filter per station
+//    (station_filter.hpp: noise model from the sensors config, corners per station, each
+//    reading's correction eased in so a 30 Hz reading makes no step in a 120 Hz output;
+//    the position filtered at the joint its segment turns about, e.g. the elbow), or the
+//    One-Euro filter (Casiez et al. 2012) with velocity prediction; a station that
 //    drops out or goes stale is held (a short fading extrapolation, then still) and, when it
 //    returns, blended back over blend_back_s instead of jumping;
 //  - trunk: the chest sensor's rotation since calibration is split into a pelvis part (yaw
 //    that lazily follows the chest within a twist limit, plus a share of the bend) and the
 //    rest, spread evenly over the spine joints up to the chest; the hips are placed so the
-//    chest segment lands where its sensor says;
+//    chest segment lands where its sensor says, then smoothed (the trunk prior: hips move
+//    slowly, the trunk turns about them; hips_cutoff_hz) and the chest follows them;
 //  - head: the head's rotation relative to the chest is spread over the neck joints;
 //  - arms: the clavicle turns with the chest and lifts when the upper arm rises above
 //    clavicle_lift_start_deg; each arm is an analytic two-bone IK from the shoulder to the
@@ -40,23 +45,55 @@
 #include "common/sensors/hand_model.hpp"
 #include "common/sensors/one_euro.hpp"
 #include "common/sensors/sensor_frame.hpp"
+#include "common/sensors/station_filter.hpp"
 
 namespace vistel {
 
 enum class Stance : std::uint8_t { kStanding, kSeated };
+// How stations are filtered: a Kalman filter tuned by the tracker's noise model
+// (station_filter.hpp), or the One-Euro filter with velocity prediction (one_euro.hpp).
+enum class StationFilterKind : std::uint8_t { kKalman, kOneEuro };
+
+// The Kalman settings (chosen by bench_posture sweeps over the shared gesture clips, with
+// CMU 131_01 in view; no clip was held out, so they may fit these clips): rotations at a 4 Hz
+// corner; the wrists' positions (filtered at the elbow, see StationFilterParams::pivot) at 2 Hz
+// rising by 5 Hz per m/s of their speed; the head's position at 2 Hz; the chest (which carries the
+// trunk, and the hips and legs through lever arms) at 1.5 Hz, its position's corner rising by 5 Hz
+// per m/s.
+inline std::array<StationFilterParams, kBodySiteCount> defaultStationFilters() {
+  std::array<StationFilterParams, kBodySiteCount> f{};
+  f[static_cast<std::size_t>(BodySite::kHead)].position_cutoff_hz = 2.0f;
+  for (BodySite wrist : {BodySite::kLeftWrist, BodySite::kRightWrist}) {
+    f[static_cast<std::size_t>(wrist)].position_cutoff_hz = 2.0f;
+    f[static_cast<std::size_t>(wrist)].position_beta = 5.0f;
+  }
+  StationFilterParams& chest = f[static_cast<std::size_t>(BodySite::kChest)];
+  chest.position_cutoff_hz = 1.5f;
+  chest.orientation_cutoff_hz = 1.5f;
+  chest.position_beta = 5.0f;
+  return f;
+}
 
 struct SolverOptions {
   Stance stance = Stance::kStanding;
-  bool filter = true;
+  bool filter = true;  // false: every station's latest reading as it is
+  StationFilterKind filter_kind = StationFilterKind::kKalman;
+  // kKalman: noise model, corners and easing per station (indexed by BodySite); see
+  // defaultStationFilters().
+  std::array<StationFilterParams, kBodySiteCount> station_filters = defaultStationFilters();
   // beta: Hz per m/s (positions) or per rad/s (rotations). Prediction trades lag against
   // jitter: its velocity is low-passed at predict_cutoff_hz (bench_posture measures both).
   OneEuroParams position_filter{1.0f, 15.0f, 1.0f, 2.0f};
   OneEuroParams orientation_filter{1.0f, 3.0f, 1.0f, 2.0f};
   bool predict = true;
-  double max_predict_s = 0.05;            // never extrapolate a reading further than this
-  double stale_after_s = 0.15;            // a reading older than this counts as a dropout
-  double hold_predict_s = 0.08;           // fading extrapolation while a station is out
-  double blend_back_s = 0.3;              // blend from the held pose back onto a returning station
+  double max_predict_s = 0.05;   // never extrapolate a reading further than this
+  double stale_after_s = 0.15;   // a reading older than this counts as a dropout
+  double hold_predict_s = 0.08;  // fading extrapolation while a station is out
+  double blend_back_s = 0.3;     // blend from the held pose back onto a returning station
+  // The trunk's prior: the hips' position (from the chest sensor and the trunk's rotation)
+  // smoothed at this corner, rising by hips_beta Hz per m/s of their speed; 0: off.
+  float hips_cutoff_hz = 1.0f;
+  float hips_beta = 15.0f;
   float pelvis_tilt_share = 0.4f;         // share of the trunk's bend the pelvis takes
   float pelvis_twist_limit_deg = 30.0f;   // most the spine twists before the pelvis turns
   double pelvis_follow_s = 1.0;           // time constant of the pelvis following the chest
@@ -93,6 +130,7 @@ class PostureSolver {
   struct Track {
     OneEuroVec3 position;
     OneEuroQuat rotation;
+    StationFilter kalman;
     double sample_time = 0.0;
     bool seen = false;
     bool lost = false;
@@ -177,6 +215,7 @@ class PostureSolver {
   std::array<Arm, 2> arms_;
   std::array<Leg, 2> legs_;
   std::array<StationCalibration, kBodySiteCount> stations_{};
+  std::array<glm::vec3, kBodySiteCount> pivot_{};  // sensor -> segment joint, sensor frame
 
   // Per-frame state.
   std::array<Track, kBodySiteCount> tracks_{};
@@ -187,6 +226,9 @@ class PostureSolver {
   float chest_yaw_ = 0.0f;  // unwrapped
   float prev_yaw_raw_ = 0.0f;
   float pelvis_yaw_ = 0.0f;
+  Kalman3 hips_kf_;
+  bool hips_init_ = false;
+  double hips_speed_ = 0.0;
 };
 
 }  // namespace vistel

@@ -391,7 +391,7 @@ Result<SensorSetup> parseSensorSetup(std::string_view toml_text, std::string_vie
     r.allowOnly(*t, w,
                 {"kind", "transport", "port", "baud", "encoding", "mode", "units", "output_list",
                  "reply_timeout_s", "check_status", "transmitter_axis", "transmitter_angle_deg",
-                 "transmitter_position", "usb"});
+                 "transmitter_position", "usb", "position_noise_m", "orientation_noise_deg"});
     setup.tracker_kind = r.choice(*t, "kind", w, TrackerKind::kFastrak,
                                   {{"fastrak", TrackerKind::kFastrak},
                                    {"hid", TrackerKind::kHid},
@@ -428,6 +428,13 @@ Result<SensorSetup> parseSensorSetup(std::string_view toml_text, std::string_vie
     tc.reply_timeout_s = r.number(*t, "reply_timeout_s", w, 1.0, 0.01, 60.0);
     tc.check_status = r.boolean(*t, "check_status", w, true);
     tc.transmitter = readPlacement(r, *t, w);
+    // The tracker's noise model: the station filter's reading variance.
+    for (StationFilterParams& f : setup.solver.station_filters) {
+      f.position_noise_m =
+          static_cast<float>(r.number(*t, "position_noise_m", w, f.position_noise_m, 0, 1));
+      f.orientation_noise_deg = static_cast<float>(
+          r.number(*t, "orientation_noise_deg", w, f.orientation_noise_deg, 0, 90));
+    }
     if (const toml::table* u = r.table(*t, "usb", w)) {
       const std::string wu = "tracker.usb";
       r.allowOnly(*u, wu, {"vendor_id", "product_id", "interface", "endpoint_out", "endpoint_in"});
@@ -513,13 +520,63 @@ Result<SensorSetup> parseSensorSetup(std::string_view toml_text, std::string_vie
   // Solver.
   if (const toml::table* t = r.table(root, "solver", "")) {
     const std::string w = "solver";
-    r.allowOnly(
-        *t, w,
-        {"stance", "filter", "predict", "position_min_cutoff_hz", "position_beta",
-         "orientation_min_cutoff_hz", "orientation_beta", "predict_cutoff_hz", "stale_after_s",
-         "blend_back_s", "pelvis_tilt_share", "pelvis_twist_limit_deg", "clavicle_lift_start_deg",
-         "clavicle_lift_gain", "clavicle_lift_max_deg", "joint_limits", "fingers"});
+    r.allowOnly(*t, w,
+                {"stance",
+                 "filter",
+                 "predict",
+                 "position_min_cutoff_hz",
+                 "position_beta",
+                 "orientation_min_cutoff_hz",
+                 "orientation_beta",
+                 "predict_cutoff_hz",
+                 "stale_after_s",
+                 "blend_back_s",
+                 "pelvis_tilt_share",
+                 "pelvis_twist_limit_deg",
+                 "clavicle_lift_start_deg",
+                 "clavicle_lift_gain",
+                 "clavicle_lift_max_deg",
+                 "joint_limits",
+                 "fingers",
+                 "station_filter",
+                 "kalman_cutoff_hz",
+                 "head_position_cutoff_hz",
+                 "wrist_position_cutoff_hz",
+                 "wrist_beta",
+                 "chest_cutoff_hz",
+                 "chest_beta",
+                 "ease_intervals",
+                 "hips_cutoff_hz",
+                 "hips_beta"});
     SolverOptions& o = setup.solver;
+    o.filter_kind = r.choice(
+        *t, "station_filter", w, o.filter_kind,
+        {{"kalman", StationFilterKind::kKalman}, {"one_euro", StationFilterKind::kOneEuro}});
+    for (int site = 0; site < kBodySiteCount; ++site) {
+      StationFilterParams& f = o.station_filters[static_cast<std::size_t>(site)];
+      if (site == static_cast<int>(BodySite::kChest)) {
+        f.position_cutoff_hz = f.orientation_cutoff_hz =
+            static_cast<float>(r.number(*t, "chest_cutoff_hz", w, f.position_cutoff_hz, 0.01, 100));
+        f.position_beta =
+            static_cast<float>(r.number(*t, "chest_beta", w, f.position_beta, 0, 100));
+      } else {
+        f.orientation_cutoff_hz = static_cast<float>(
+            r.number(*t, "kalman_cutoff_hz", w, f.orientation_cutoff_hz, 0.01, 100));
+        if (site == static_cast<int>(BodySite::kHead)) {
+          f.position_cutoff_hz = static_cast<float>(
+              r.number(*t, "head_position_cutoff_hz", w, f.position_cutoff_hz, 0.01, 100));
+        } else {
+          f.position_cutoff_hz = static_cast<float>(
+              r.number(*t, "wrist_position_cutoff_hz", w, f.position_cutoff_hz, 0.01, 100));
+          f.position_beta =
+              static_cast<float>(r.number(*t, "wrist_beta", w, f.position_beta, 0, 100));
+        }
+      }
+      f.ease_intervals = r.number(*t, "ease_intervals", w, f.ease_intervals, 0, 4);
+    }
+    o.hips_cutoff_hz =
+        static_cast<float>(r.number(*t, "hips_cutoff_hz", w, o.hips_cutoff_hz, 0, 100));
+    o.hips_beta = static_cast<float>(r.number(*t, "hips_beta", w, o.hips_beta, 0, 100));
     o.stance = r.choice(*t, "stance", w, o.stance,
                         {{"standing", Stance::kStanding}, {"seated", Stance::kSeated}});
     o.filter = r.boolean(*t, "filter", w, o.filter);

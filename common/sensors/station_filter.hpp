@@ -1,0 +1,283 @@
+// StationFilter: the sensor-space filter of one 6-DOF station (DESIGN.md §5), run by the
+// posture solver before the solve and evaluated at every frame time.
+//
+// Estimator: a Kalman filter (Kalman 1960) per station, position and orientation alike, with
+// a white-jerk (constant acceleration) or white-acceleration (constant velocity) motion
+// model, per axis (Bar-Shalom, Li & Kirubarajan 2001, §6.3); the orientation through the
+// rotation vector of the error between a reading and the prediction (world frame,
+// re-based on every reading). The reading's variance R is the tracker's noise model (the
+// sensors config's figures: RMS of the 3-D position error and of the rotation angle, split
+// evenly over three axes); the process density is set by one corner: the steady-state
+// continuous filter of an n-fold integrator is an n-th order Butterworth low-pass with
+// corner (q / R_c)^(1/2n) (Kalman & Bucy 1961), R_c = R * (reading interval), so
+// q = R_c (2 pi cutoff_hz)^(2n). The gains then depend on the corner and the reading interval
+// alone; the noise figures set the covariances' scale (the start-up prior). The corner rises
+// with the station's own estimated speed (low-passed) by beta, Hz per m/s or per rad/s, up to
+// max_cutoff_hz. At a corner f and reading interval T the filter still passes about 2 f T of
+// each reading's noise (its gain on the newest reading): that, not the corner, sets the
+// floor under the jitter.
+//
+// Output: the estimate extrapolated by its own motion model to the asked time (the
+// reading's age: latency and, with a shared update rate, the other stations' turns), so
+// time keeps running between readings. A new reading changes that trajectory; the change is
+// eased in with a C2 smootherstep between the old and the new trajectory over
+// ease_intervals reading intervals (no step in position, velocity or acceleration at a
+// reading), for about half that time of delay on the corrected part only.
+//
+// Times are seconds on the frame clock; positions metres; rotations world frame (tracker
+// space). Readings not newer than the last are ignored; no input fails. Allocation-free;
+// every call O(1).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include "common/sensors/rotation_utils.hpp"
+
+namespace vistel {
+
+struct StationFilterParams {
+  // The tracker's noise model (a FASTRAK's by default; the sensors config's [tracker]).
+  float position_noise_m = 0.0008f;     // RMS of the 3-D position error of one reading
+  float orientation_noise_deg = 0.15f;  // RMS rotation angle of one reading
+  // Corners, Hz: where the body's motion sinks below the noise.
+  float position_cutoff_hz = 4.0f;
+  float orientation_cutoff_hz = 4.0f;
+  // The corner rises with the station's own estimated speed (as One Euro's cutoff does):
+  // Hz per m/s and per rad/s. A still trunk is smoothed hard, a walking one followed.
+  float position_beta = 0.0f;
+  float orientation_beta = 0.0f;
+  float speed_cutoff_hz = 1.0f;       // the speed is low-passed at this corner
+  float max_cutoff_hz = 8.0f;         // the corners rise no higher (a noisy speed feeds back)
+  bool constant_acceleration = true;  // white jerk (else white acceleration)
+  double ease_intervals = 0.5;        // ease each correction in over this many intervals
+
+  double max_extrapolate_s = 0.2;  // never extrapolate further past the last reading
+  // Where on its segment the posture solver filters a station's position: 0 at the sensor,
+  // 1 at the joint the segment turns about (the elbow for a wrist sensor), between: between.
+  float pivot = 1.0f;
+};
+
+// A scalar-per-axis Kalman filter on a 3-vector: value, velocity, acceleration (all three
+// axes share one covariance: the noise is isotropic).
+class Kalman3 {
+ public:
+  void init(const glm::dvec3& x, double var_x, double var_v, double var_a) {
+    x_ = x;
+    v_ = a_ = glm::dvec3(0.0);
+    p_ = glm::dmat3(0.0);
+    p_[0][0] = var_x;
+    p_[1][1] = var_v;
+    p_[2][2] = var_a;
+  }
+  // Advances by dt with process density q (white jerk, or white acceleration with the
+  // acceleration held at zero when !ca).
+  void predict(double dt, double q, bool ca) {
+    if (!(dt > 0.0)) return;
+    x_ += v_ * dt + a_ * (0.5 * dt * dt);
+    v_ += a_ * dt;
+    glm::dmat3 f(1.0);  // column-major: f[col][row]
+    f[1][0] = dt;
+    f[2][0] = 0.5 * dt * dt;
+    f[2][1] = dt;
+    p_ = f * p_ * glm::transpose(f);
+    const double d2 = dt * dt, d3 = d2 * dt, d4 = d3 * dt, d5 = d4 * dt;
+    if (!ca) {
+      add(0, 0, q * d3 / 3.0);
+      add(0, 1, q * d2 / 2.0);
+      add(1, 1, q * dt);
+      for (int i = 0; i < 3; ++i) p_[2][i] = p_[i][2] = 0.0;
+      a_ = glm::dvec3(0.0);
+      return;
+    }
+    add(0, 0, q * d5 / 20.0);
+    add(0, 1, q * d4 / 8.0);
+    add(0, 2, q * d3 / 6.0);
+    add(1, 1, q * d3 / 3.0);
+    add(1, 2, q * d2 / 2.0);
+    add(2, 2, q * dt);
+  }
+  // Measures the value: innovation e (reading minus predicted value), variance r.
+  void correct(const glm::dvec3& e, double r) {
+    const double s = p_[0][0] + r;
+    const glm::dvec3 k(p_[0][0] / s, p_[0][1] / s, p_[0][2] / s);
+    x_ += e * k.x;
+    v_ += e * k.y;
+    a_ += e * k.z;
+    glm::dmat3 p = p_;
+    for (int c = 0; c < 3; ++c)
+      for (int row = 0; row < 3; ++row) p[c][row] -= k[row] * p_[c][0];
+    p_ = 0.5 * (p + glm::transpose(p));
+  }
+  void setValue(const glm::dvec3& x) { x_ = x; }
+  const glm::dvec3& value() const { return x_; }
+  const glm::dvec3& velocity() const { return v_; }
+  const glm::dvec3& acceleration() const { return a_; }
+
+ private:
+  void add(int i, int j, double v) {
+    p_[i][j] += v;
+    if (i != j) p_[j][i] += v;
+  }
+  glm::dvec3 x_{0.0}, v_{0.0}, a_{0.0};
+  glm::dmat3 p_{0.0};
+};
+
+class StationFilter {
+ public:
+  void reset() { initialised_ = false; }
+  bool initialised() const { return initialised_; }
+
+  // A reading measured at t_meas and first seen at frame time t_now >= t_meas. A reading not
+  // newer than the last one is ignored. The first reading (or the first after reset()) is
+  // taken as it is, at rest.
+  void update(const glm::vec3& p, const glm::quat& q_in, double t_meas, double t_now,
+              const StationFilterParams& params) {
+    const double sp = params.position_noise_m / std::sqrt(3.0);
+    const double sr =
+        glm::radians(static_cast<double>(params.orientation_noise_deg)) / std::sqrt(3.0);
+    const double rp = std::max(sp * sp, 1e-14);
+    const double rr = std::max(sr * sr, 1e-14);
+    const double cp = 6.283185307179586 *
+                      std::min<double>(params.position_cutoff_hz + params.position_beta * speed_p_,
+                                       std::max(params.max_cutoff_hz, params.position_cutoff_hz));
+    const double cr =
+        6.283185307179586 *
+        std::min<double>(params.orientation_cutoff_hz + params.orientation_beta * speed_r_,
+                         std::max(params.max_cutoff_hz, params.orientation_cutoff_hz));
+    if (!initialised_) {
+      // Starting at rest, about as sure of the velocity and acceleration as the corner lets
+      // the filter be in steady state (a wide prior would make the first second shake).
+      pos_.init(glm::dvec3(p), rp, rp * cp * cp, rp * cp * cp * cp * cp);
+      rot_.init(glm::dvec3(0.0), rr, rr * cr * cr, rr * cr * cr * cr * cr);
+      q0_ = q_in;
+      t0_ = t_meas;
+      interval_ = 0.0;
+      speed_p_ = speed_r_ = 0.0;
+      now_ = old_ = snapshot();
+      blend_t0_ = t_now;
+
+      initialised_ = true;
+      return;
+    }
+    const double dt = t_meas - t0_;
+    if (!(dt > 0.0)) return;
+    const Poly before = blendedAt(t_now, params);
+    // The reading interval (for the process density and the easing): a running mean that one
+    // odd gap does not throw.
+    interval_ =
+        interval_ > 0.0 ? interval_ + 0.2 * (std::min(dt, 4.0 * interval_) - interval_) : dt;
+    const bool ca = params.constant_acceleration;
+    const double n2 = ca ? 6.0 : 4.0;
+    const double wp = std::pow(cp, n2);
+    const double wr = std::pow(cr, n2);
+    pos_.predict(dt, rp * interval_ * wp, ca);
+    pos_.correct(glm::dvec3(p) - pos_.value(), rp);
+    rot_.predict(dt, rr * interval_ * wr, ca);
+    const glm::quat q_pred = glm::normalize(fromRotationVector(glm::vec3(rot_.value())) * q0_);
+    const glm::quat q = glm::dot(q_in, q_pred) < 0.0f ? -q_in : q_in;
+    rot_.correct(glm::dvec3(rotationVector(q * glm::conjugate(q_pred))), rr);
+    q0_ = glm::normalize(fromRotationVector(glm::vec3(rot_.value())) * q0_);
+    rot_.setValue(glm::dvec3(0.0));
+    t0_ = t_meas;
+    // The speeds that raise the corners, low-passed at speed_cutoff_hz (a noisy speed would
+    // feed back into the corner).
+    const double a_s = 1.0 - std::exp(-6.283185307179586 * params.speed_cutoff_hz * dt);
+    speed_p_ += (glm::length(pos_.velocity()) - speed_p_) * a_s;
+    speed_r_ += (glm::length(rot_.velocity()) - speed_r_) * a_s;
+    now_ = snapshot();
+    old_ = before;
+    blend_t0_ = t_now;
+  }
+
+  // The eased estimate at time t (at or after the last update's t_now).
+  void evaluate(double t, const StationFilterParams& params, glm::vec3& p, glm::quat& q) const {
+    const Poly o = blendedAt(t, params);
+    p = glm::vec3(o.x);
+    q = o.q;
+  }
+
+  // The estimate at the last reading's time, neither extrapolated nor eased.
+  void current(glm::vec3& p, glm::quat& q) const {
+    p = glm::vec3(now_.x);
+    q = now_.q;
+  }
+
+  glm::vec3 velocity() const { return glm::vec3(now_.v); }         // m/s
+  glm::vec3 angularVelocity() const { return glm::vec3(now_.w); }  // rad/s, world frame
+  double interval() const { return interval_; }                    // s between readings
+
+ private:
+  // A trajectory anchored at time t: value and its first two derivatives.
+  struct Poly {
+    double t = 0.0;
+    glm::dvec3 x{0.0}, v{0.0}, a{0.0};
+    glm::quat q{1.0f, 0.0f, 0.0f, 0.0f};
+    glm::dvec3 w{0.0}, alpha{0.0};
+  };
+
+  static double smootherstep(double u) {
+    u = std::clamp(u, 0.0, 1.0);
+    return u * u * u * (u * (u * 6.0 - 15.0) + 10.0);
+  }
+
+  Poly snapshot() const {
+    Poly s;
+    s.t = t0_;
+    s.x = pos_.value();
+    s.v = pos_.velocity();
+    s.a = pos_.acceleration();
+    s.q = q0_;
+    s.w = rot_.velocity();
+    s.alpha = rot_.acceleration();
+    return s;
+  }
+
+  static Poly at(const Poly& s, double t, const StationFilterParams& params) {
+    const double tau = std::clamp(t - s.t, 0.0, params.max_extrapolate_s);
+    Poly o;
+    o.t = t;
+    o.x = s.x + s.v * tau + s.a * (0.5 * tau * tau);
+    o.v = s.v + s.a * tau;
+    o.a = s.a;
+    o.q = glm::normalize(fromRotationVector(glm::vec3(s.w * tau + s.alpha * (0.5 * tau * tau))) *
+                         s.q);
+    o.w = s.w + s.alpha * tau;
+    o.alpha = s.alpha;
+    return o;
+  }
+
+  // The eased output at t, as a trajectory anchored at t.
+  Poly blendedAt(double t, const StationFilterParams& params) const {
+    const Poly cur = at(now_, t, params);
+    const double span = params.ease_intervals * interval_;
+    const double w = span > 0.0 ? smootherstep((t - blend_t0_) / span) : 1.0;
+    if (w >= 1.0) return cur;
+    const Poly prev = at(old_, t, params);
+    Poly o = cur;
+    o.x = glm::mix(prev.x, cur.x, w);
+    o.v = glm::mix(prev.v, cur.v, w);
+    o.a = glm::mix(prev.a, cur.a, w);
+    o.q = glm::normalize(
+        glm::slerp(prev.q, glm::dot(prev.q, cur.q) < 0.0f ? -cur.q : cur.q, static_cast<float>(w)));
+    o.w = glm::mix(prev.w, cur.w, w);
+    o.alpha = glm::mix(prev.alpha, cur.alpha, w);
+    return o;
+  }
+
+  Kalman3 pos_;
+  Kalman3 rot_;  // rotation vector relative to q0_ (zero after every reading)
+  glm::quat q0_{1.0f, 0.0f, 0.0f, 0.0f};
+  double t0_ = 0.0;        // time of the last reading
+  double interval_ = 0.0;  // running mean of the reading interval
+  double blend_t0_ = 0.0;
+  double speed_p_ = 0.0, speed_r_ = 0.0;  // low-passed speeds, m/s and rad/s
+  Poly now_, old_;
+
+  bool initialised_ = false;
+};
+
+}  // namespace vistel
