@@ -179,8 +179,14 @@
         recordError('avatar of ' + m.name + ' has no skin');
         return;
       }
-      skinned.frustumCulled = false;  // its bounds are the rest pose's
-      skinned.material.color.setHex(m.color);
+      // An avatar with a look of its own keeps it; a plain one gets the member's colour.
+      const json = gltf.parser && gltf.parser.json;
+      const plain = !(json && json.materials && json.materials.length > 0);
+      gltf.scene.traverse((o) => {
+        if (!o.isSkinnedMesh) return;
+        o.frustumCulled = false;  // its bounds are the rest pose's
+        if (plain) o.material.color.setHex(m.color);
+      });
       m.bones = skinned.skeleton.bones;  // skin joints = the skeleton's joint order
       m.head = m.bones.find((b) => /head/i.test(b.name)) || m.bones[m.bones.length - 1];
       m.group.add(gltf.scene);

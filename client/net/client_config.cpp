@@ -4,7 +4,6 @@
 #include <filesystem>
 #include <optional>
 #include <set>
-#include <sstream>
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
@@ -15,21 +14,10 @@
 
 namespace vistel::net {
 
-#define VISTEL_CONFIG_TRY(expr)   \
-  do {                            \
-    Status st_ = (expr);          \
-    if (!st_) return st_.error(); \
-  } while (false)
-
 Result<ClientConfig> parseClientConfig(std::string_view toml_text, std::string_view source_name) {
-  toml::table root;
-  try {
-    root = toml::parse(toml_text, source_name);
-  } catch (const toml::parse_error& e) {
-    std::ostringstream where;
-    where << e.source().begin;
-    return fail("{}: {} ({})", source_name, e.description(), where.str());
-  }
+  auto parsed = parseConfigText(toml_text, source_name);
+  if (!parsed) return parsed.error();
+  const toml::table& root = *parsed;
   for (const auto& [key, node] : root) {
     static const std::set<std::string, std::less<>> kSections = {
         "network", "playback", "source", "avatars", "view", "deform", "lod"};

@@ -10,82 +10,14 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "common/glb/glb_builder.hpp"
+#include "common/glb/glb_container.hpp"
 #include "common/math/transform.hpp"
 
 namespace vistel::record {
 namespace {
 
 using nlohmann::json;
-
-constexpr int kArrayBuffer = 34962;
-constexpr int kElementArrayBuffer = 34963;
-constexpr int kUnsignedByte = 5121;
-constexpr int kUnsignedShort = 5123;
-constexpr int kUnsignedInt = 5125;
-constexpr int kFloat = 5126;
-constexpr std::uint32_t kGlbMagic = 0x46546C67;  // "glTF"
-constexpr std::uint32_t kChunkJson = 0x4E4F534A;
-constexpr std::uint32_t kChunkBin = 0x004E4942;
-
-// The binary chunk and the accessors and buffer views that describe it.
-class BinBuilder {
- public:
-  int addView(const void* data, std::size_t size, int target) {
-    while (bin_.size() % 4 != 0) bin_.push_back(0);
-    const std::size_t offset = bin_.size();
-    bin_.resize(offset + size);
-    if (size > 0) std::memcpy(bin_.data() + offset, data, size);
-    json view = {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", size}};
-    if (target != 0) view["target"] = target;
-    views_.push_back(std::move(view));
-    return static_cast<int>(views_.size()) - 1;
-  }
-
-  // Float elements of `components` each; min/max per component when `bounds`.
-  int addFloats(const std::vector<float>& values, int components, const char* type, int target,
-                bool bounds) {
-    json acc = {{"bufferView", addView(values.data(), values.size() * sizeof(float), target)},
-                {"componentType", kFloat},
-                {"count", values.size() / static_cast<std::size_t>(components)},
-                {"type", type}};
-    if (bounds) {
-      const auto k = static_cast<std::size_t>(components);
-      std::vector<float> lo(k, std::numeric_limits<float>::max());
-      std::vector<float> hi(k, std::numeric_limits<float>::lowest());
-      for (std::size_t i = 0; i < values.size(); ++i) {
-        lo[i % k] = std::min(lo[i % k], values[i]);
-        hi[i % k] = std::max(hi[i % k], values[i]);
-      }
-      acc["min"] = lo;
-      acc["max"] = hi;
-    }
-    return add(std::move(acc));
-  }
-
-  template <typename T>
-  int addIntegers(const std::vector<T>& values, int component_type, const char* type, int per,
-                  int target) {
-    return add({{"bufferView", addView(values.data(), values.size() * sizeof(T), target)},
-                {"componentType", component_type},
-                {"count", values.size() / static_cast<std::size_t>(per)},
-                {"type", type}});
-  }
-
-  int add(json accessor) {
-    accessors_.push_back(std::move(accessor));
-    return static_cast<int>(accessors_.size()) - 1;
-  }
-
-  std::vector<std::uint8_t>& bin() { return bin_; }
-  std::size_t size() const { return bin_.size(); }
-  json& views() { return views_; }
-  json& accessors() { return accessors_; }
-
- private:
-  std::vector<std::uint8_t> bin_;
-  json views_ = json::array();
-  json accessors_ = json::array();
-};
 
 bool finite(const glm::vec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
@@ -213,17 +145,17 @@ class RoomDocument {
       const glm::vec3 n = v < skin.normals.size() ? skin.normals[v] : glm::vec3(0.0f, 1.0f, 0.0f);
       append(normals, unitOrUp(glm::mat3(to_joint) * n));
     }
-    attributes["POSITION"] = bin_.addFloats(positions, 3, "VEC3", kArrayBuffer, true);
-    attributes["NORMAL"] = bin_.addFloats(normals, 3, "VEC3", kArrayBuffer, false);
+    attributes["POSITION"] = bin_.addFloats(positions, 3, "VEC3", kGltfArrayBuffer, true);
+    attributes["NORMAL"] = bin_.addFloats(normals, 3, "VEC3", kGltfArrayBuffer, false);
     if (skinned) addSkinAttributes(avatar, attributes);
     json primitive = {{"attributes", attributes}, {"mode", 4}};
     if (nvert < 65535) {
       std::vector<std::uint16_t> indices(skin.indices.begin(), skin.indices.end());
       primitive["indices"] =
-          bin_.addIntegers(indices, kUnsignedShort, "SCALAR", 1, kElementArrayBuffer);
+          bin_.addIntegers(indices, kGltfUnsignedShort, "SCALAR", 1, kGltfElementArrayBuffer);
     } else {
       primitive["indices"] =
-          bin_.addIntegers(skin.indices, kUnsignedInt, "SCALAR", 1, kElementArrayBuffer);
+          bin_.addIntegers(skin.indices, kGltfUnsignedInt, "SCALAR", 1, kGltfElementArrayBuffer);
     }
     meshes_.push_back({{"name", avatar.name.empty() ? std::string("avatar") : avatar.name},
                        {"primitives", json::array({primitive})}});
@@ -272,30 +204,10 @@ class RoomDocument {
       doc["bufferViews"] = bin_.views();
       doc["buffers"] = json::array({{{"byteLength", bin.size()}}});
     }
-    std::string text = doc.dump();
-    while (text.size() % 4 != 0) text.push_back(' ');
-    // The container: header, JSON chunk, BIN chunk (little-endian hosts only: x86, ARM).
-    std::vector<std::uint8_t> out;
-    const std::size_t total = 12 + 8 + text.size() + (bin.empty() ? 0 : 8 + bin.size());
-    out.reserve(total);
-    auto word = [&out](std::uint32_t w) {
-      for (int i = 0; i < 4; ++i) out.push_back(static_cast<std::uint8_t>(w >> (8 * i)));
-    };
-    word(kGlbMagic);
-    word(2);
-    word(static_cast<std::uint32_t>(total));
-    word(static_cast<std::uint32_t>(text.size()));
-    word(kChunkJson);
-    out.insert(out.end(), text.begin(), text.end());
-    if (!bin.empty()) {
-      word(static_cast<std::uint32_t>(bin.size()));
-      word(kChunkBin);
-      out.insert(out.end(), bin.begin(), bin.end());
-    }
-    return out;
+    return assembleGlb(doc.dump(), bin);
   }
 
-  std::size_t binSize() const { return bin_.size(); }
+  std::size_t binSize() { return bin_.bin().size(); }
 
  private:
   std::string name(int node_index) {
@@ -346,18 +258,18 @@ class RoomDocument {
       if (bytes) {
         std::vector<std::uint8_t> small(joints[set].begin(), joints[set].end());
         attributes[fmt::format("JOINTS_{}", set)] =
-            bin_.addIntegers(small, kUnsignedByte, "VEC4", 4, kArrayBuffer);
+            bin_.addIntegers(small, kGltfUnsignedByte, "VEC4", 4, kGltfArrayBuffer);
       } else {
         attributes[fmt::format("JOINTS_{}", set)] =
-            bin_.addIntegers(joints[set], kUnsignedShort, "VEC4", 4, kArrayBuffer);
+            bin_.addIntegers(joints[set], kGltfUnsignedShort, "VEC4", 4, kGltfArrayBuffer);
       }
       attributes[fmt::format("WEIGHTS_{}", set)] =
-          bin_.addFloats(weights[set], 4, "VEC4", kArrayBuffer, false);
+          bin_.addFloats(weights[set], 4, "VEC4", kGltfArrayBuffer, false);
     }
   }
 
   RecordingSummary& summary_;
-  BinBuilder bin_;
+  GlbBuilder bin_;
   json nodes_ = json::array();
   json roots_ = json::array();
   json meshes_ = json::array();

@@ -94,4 +94,16 @@ void GpuLook::create(const AvatarLook& look, std::size_t index_count) {
   }
 }
 
+void attachUvAttribute(GLuint vao, GLuint& buffer, std::span<const glm::vec2> uvs) {
+  glBindVertexArray(vao);
+  if (buffer == 0) glGenBuffers(1, &buffer);
+  glBindBuffer(GL_ARRAY_BUFFER, buffer);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(uvs.size_bytes()), uvs.data(),
+               GL_STATIC_DRAW);
+  glVertexAttribPointer(6, 2, GL_FLOAT, GL_FALSE, sizeof(glm::vec2), nullptr);
+  glEnableVertexAttribArray(6);
+  glBindVertexArray(0);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+}
+
 }  // namespace vistel

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,10 @@
 #include "common/base/result.hpp"
 
 namespace vistel {
+
+// Puts texture coordinates into a mesh's vertex array as attribute 6 (creating `buffer` on
+// first use): GpuMesh and GpuSkinMesh's attachUvs.
+void attachUvAttribute(GLuint vao, GLuint& buffer, std::span<const glm::vec2> uvs);
 
 // Textures larger than this (pixels) are not decoded (4096 x 4096: 64 MiB of RGBA).
 inline constexpr std::int64_t kMaxDrawnTexturePixels = std::int64_t{4096} * 4096;

@@ -1,5 +1,7 @@
 #include "client/render/gpu_mesh.hpp"
 
+#include "client/render/gpu_look.hpp"
+
 #include <algorithm>
 #include <cassert>
 #include <cstdint>
@@ -63,15 +65,7 @@ void GpuMesh::upload(std::span<const glm::vec3> positions, std::span<const glm::
 
 void GpuMesh::attachUvs(std::span<const glm::vec2> uvs) {
   if (vao_ == 0 || static_cast<int>(uvs.size()) != vertex_count_) return;
-  glBindVertexArray(vao_);
-  if (uvs_ == 0) glGenBuffers(1, &uvs_);
-  glBindBuffer(GL_ARRAY_BUFFER, uvs_);
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(uvs.size_bytes()), uvs.data(),
-               GL_STATIC_DRAW);
-  glVertexAttribPointer(6, 2, GL_FLOAT, GL_FALSE, sizeof(glm::vec2), nullptr);
-  glEnableVertexAttribArray(6);
-  glBindVertexArray(0);
-  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  attachUvAttribute(vao_, uvs_, uvs);
 }
 
 void GpuMesh::drawRange(std::uint32_t first, std::uint32_t count) const {

@@ -1,5 +1,7 @@
 #include "client/render/gpu_skin_mesh.hpp"
 
+#include "client/render/gpu_look.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cstdint>
@@ -96,15 +98,7 @@ void GpuSkinMesh::uploadOffsets(std::span<const glm::vec3> positions,
 
 void GpuSkinMesh::attachUvs(std::span<const glm::vec2> uvs) {
   if (vao_ == 0 || static_cast<int>(uvs.size()) != vertex_count_) return;
-  glBindVertexArray(vao_);
-  if (uvs_ == 0) glGenBuffers(1, &uvs_);
-  glBindBuffer(GL_ARRAY_BUFFER, uvs_);
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(uvs.size_bytes()), uvs.data(),
-               GL_STATIC_DRAW);
-  glVertexAttribPointer(6, 2, GL_FLOAT, GL_FALSE, sizeof(glm::vec2), nullptr);
-  glEnableVertexAttribArray(6);
-  glBindVertexArray(0);
-  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  attachUvAttribute(vao_, uvs_, uvs);
 }
 
 void GpuSkinMesh::draw(bool with_offsets) const {

@@ -1,5 +1,7 @@
 #include "common/config/config_table.hpp"
 
+#include <sstream>
+
 namespace vistel {
 namespace {
 
@@ -10,6 +12,16 @@ std::optional<double> asNumber(const toml::node& n) {
 }
 
 }  // namespace
+
+Result<toml::table> parseConfigText(std::string_view toml_text, std::string_view source_name) {
+  try {
+    return toml::parse(toml_text, source_name);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream where;
+    where << e.source().begin;
+    return fail("{}: {} ({})", source_name, e.description(), where.str());
+  }
+}
 
 ConfigTable::ConfigTable(const toml::table& root, std::string_view section, std::string_view source)
     : source_(source), section_(section) {

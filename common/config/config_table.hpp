@@ -16,6 +16,18 @@
 
 namespace vistel {
 
+// A settings file's text parsed; a syntax error is an Error naming the source and where
+// ("server.toml: expected ... (line 3, column 7)"). toml++ reports those by exception:
+// they stop here.
+Result<toml::table> parseConfigText(std::string_view toml_text, std::string_view source_name);
+
+// In a function returning Status or Result: returns the error of a failed Status.
+#define VISTEL_CONFIG_TRY(expr)   \
+  do {                            \
+    Status st_ = (expr);          \
+    if (!st_) return st_.error(); \
+  } while (false)
+
 class ConfigTable {
  public:
   // The top-level table [section] of root (absent: every read keeps its default).

@@ -10,16 +10,9 @@
 #include <tiny_gltf.h>
 
 #include "common/base/result.hpp"
+#include "common/glb/gltf_enums.hpp"
 
 namespace vistel {
-
-// glTF component types (the GL enums).
-inline constexpr int kGltfByte = 5120;
-inline constexpr int kGltfUnsignedByte = 5121;
-inline constexpr int kGltfShort = 5122;
-inline constexpr int kGltfUnsignedShort = 5123;
-inline constexpr int kGltfUnsignedInt = 5125;
-inline constexpr int kGltfFloat = 5126;
 
 struct AccessorData {
   int count = 0;       // elements

@@ -5,7 +5,7 @@
 #include <limits>
 
 #include "common/base/file.hpp"
-#include "offline/gltf/glb_container.hpp"
+#include "common/glb/glb_container.hpp"
 
 namespace vistel {
 namespace {

@@ -10,7 +10,7 @@
 #include <fmt/format.h>
 
 #include "common/avatar/avatar_io.hpp"
-#include "offline/gltf/gltf_export.hpp"
+#include "common/glb/gltf_export.hpp"
 #include "offline/synth/default_avatar.hpp"
 #include "offline/tool/tool_commands.hpp"
 

@@ -28,12 +28,12 @@
 
 #include "common/base/file.hpp"
 #include "common/deform/prop.hpp"
+#include "common/glb/gltf_export.hpp"
 #include "common/motion/auto_joint_map.hpp"
 #include "common/motion/bvh.hpp"
 #include "common/motion/joint_map.hpp"
 #include "common/motion/retarget.hpp"
 #include "common/scene/deform_scene.hpp"
-#include "offline/gltf/gltf_export.hpp"
 #include "offline/tool/tool_commands.hpp"
 
 namespace vistel {

@@ -10,11 +10,11 @@
 #include "common/anim/posture.hpp"
 #include "common/anim/skinning.hpp"
 #include "common/anim/skinning_rig.hpp"
+#include "common/glb/gltf_export.hpp"
 #include "common/motion/auto_joint_map.hpp"
 #include "common/motion/bvh.hpp"
 #include "common/motion/joint_map.hpp"
 #include "common/motion/retarget.hpp"
-#include "offline/gltf/gltf_export.hpp"
 #include "offline/tool/tool_commands.hpp"
 
 namespace vistel {

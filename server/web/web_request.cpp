@@ -196,40 +196,11 @@ std::optional<ParsedHead> parseRequestHead(std::string_view bytes, std::size_t m
 }
 
 std::string_view statusText(int status) {
-  switch (status) {
-    case 200:
-      return "OK";
-    case 101:
-      return "Switching Protocols";
-    case 304:
-      return "Not Modified";
-    case 400:
-      return "Bad Request";
-    case 403:
-      return "Forbidden";
-    case 404:
-      return "Not Found";
-    case 405:
-      return "Method Not Allowed";
-    case 408:
-      return "Request Timeout";
-    case 413:
-      return "Payload Too Large";
-    case 414:
-      return "URI Too Long";
-    case 426:
-      return "Upgrade Required";
-    case 429:
-      return "Too Many Requests";
-    case 431:
-      return "Request Header Fields Too Large";
-    case 500:
-      return "Internal Server Error";
-    case 503:
-      return "Service Unavailable";
-    default:
-      return "Error";
-  }
+  if (status < 100 || status > 999) return "Error";
+  const http::status known = http::int_to_status(static_cast<unsigned>(status));
+  if (known == http::status::unknown) return "Error";
+  const auto reason = http::obsolete_reason(known);  // Beast's table of the standard phrases
+  return {reason.data(), reason.size()};
 }
 
 }  // namespace vistel::server

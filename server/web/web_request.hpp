@@ -86,7 +86,7 @@ struct HeadError {
 std::optional<ParsedHead> parseRequestHead(std::string_view bytes, std::size_t max_header_bytes,
                                            HeadError* error);
 
-// The standard reason phrase of the statuses this server sends ("Not Found").
+// The standard reason phrase of an HTTP status ("Not Found"); "Error" for one unknown.
 std::string_view statusText(int status);
 
 }  // namespace vistel::server

@@ -18,8 +18,8 @@
 #include <nlohmann/json.hpp>
 
 #include "common/avatar/avatar_io.hpp"
-#include "offline/gltf/glb_container.hpp"
-#include "offline/gltf/gltf_export.hpp"
+#include "common/glb/glb_container.hpp"
+#include "common/glb/gltf_export.hpp"
 #include "offline/gltf/gltf_import.hpp"
 #include "tests/fuzz/fuzz_support.hpp"
 #include "tests/fuzz/tiny_avatar.hpp"

@@ -1,4 +1,4 @@
-#include "offline/gltf/gltf_export.hpp"
+#include "common/glb/gltf_export.hpp"
 
 #include <algorithm>
 
@@ -8,7 +8,7 @@
 
 #include "common/anim/posture.hpp"
 #include "common/anim/skinning.hpp"
-#include "offline/gltf/glb_container.hpp"
+#include "common/glb/glb_container.hpp"
 #include "offline/gltf/gltf_import.hpp"
 #include "tests/gltf/gltf_test_models.hpp"
 #include "tests/support/test_support.hpp"

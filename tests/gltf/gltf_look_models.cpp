@@ -5,7 +5,7 @@
 #include <stb_image_write.h>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "offline/gltf/glb_container.hpp"
+#include "common/glb/glb_container.hpp"
 
 namespace vistel::test {
 namespace {

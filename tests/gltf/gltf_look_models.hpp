@@ -11,7 +11,7 @@
 #include <glm/glm.hpp>
 #include <nlohmann/json.hpp>
 
-#include "offline/gltf/gltf_export.hpp"
+#include "common/glb/gltf_export.hpp"
 
 namespace vistel::test {
 

@@ -8,8 +8,8 @@
 
 #include "common/avatar/avatar_io.hpp"
 #include "common/base/file.hpp"
+#include "common/glb/gltf_export.hpp"
 #include "common/motion/auto_joint_map.hpp"
-#include "offline/gltf/gltf_export.hpp"
 #include "offline/gltf/gltf_import.hpp"
 #include "offline/gltf/gltf_look.hpp"
 #include "offline/gltf/gltf_vrm.hpp"

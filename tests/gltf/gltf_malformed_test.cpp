@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "offline/gltf/glb_container.hpp"
+#include "common/glb/glb_container.hpp"
 #include "offline/gltf/gltf_import.hpp"
 #include "tests/gltf/gltf_test_models.hpp"
 

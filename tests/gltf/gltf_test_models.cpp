@@ -10,7 +10,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 
-#include "offline/gltf/glb_container.hpp"
+#include "common/glb/glb_container.hpp"
 
 namespace vistel::test {
 namespace {

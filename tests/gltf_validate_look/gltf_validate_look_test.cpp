@@ -2,7 +2,7 @@
 // maps, several primitives) pass the Khronos glTF validator with 0 errors.
 #include <gtest/gtest.h>
 
-#include "offline/gltf/gltf_export.hpp"
+#include "common/glb/gltf_export.hpp"
 #include "offline/gltf/gltf_import.hpp"
 #include "offline/synth/default_avatar.hpp"
 #include "tests/gltf/gltf_look_models.hpp"

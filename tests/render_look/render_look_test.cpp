@@ -12,7 +12,7 @@
 #include "client/render/scene_renderer.hpp"
 #include "client/view/room_view.hpp"
 #include "common/avatar/avatar_io.hpp"
-#include "offline/gltf/gltf_export.hpp"
+#include "common/glb/gltf_export.hpp"
 #include "offline/gltf/gltf_import.hpp"
 #include "offline/synth/default_avatar.hpp"
 #include "tests/gltf/gltf_look_models.hpp"

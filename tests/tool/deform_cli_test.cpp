@@ -15,7 +15,7 @@
 
 #include "common/avatar/avatar_io.hpp"
 #include "common/base/file.hpp"
-#include "offline/gltf/glb_container.hpp"
+#include "common/glb/glb_container.hpp"
 #include "tests/support/test_support.hpp"
 #include "tests/tool/tool_runner.hpp"
 

@@ -4,7 +4,7 @@
 
 #include "common/anim/posture.hpp"
 #include "common/anim/skinning.hpp"
-#include "offline/gltf/gltf_export.hpp"
+#include "common/glb/gltf_export.hpp"
 #include "offline/gltf/gltf_import.hpp"
 #include "tests/gltf/gltf_test_models.hpp"
 #include "tests/support/test_support.hpp"

@@ -70,23 +70,8 @@ class WebServerProcess {
   std::uint16_t web_ = 0;
 };
 
-// Sends raw bytes on a new connection and reads until the peer closes or 3 s pass.
 std::string sendAndRead(std::uint16_t port, const std::string& bytes, double wait_s = 3.0) {
-  const int fd = test::connectLoopback(port);
-  if (fd < 0) return {};
-  ::send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL);
-  timeval timeout{static_cast<time_t>(wait_s),
-                  static_cast<suseconds_t>((wait_s - static_cast<time_t>(wait_s)) * 1e6)};
-  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
-  std::string out;
-  char buffer[4096];
-  while (true) {
-    const ssize_t n = ::recv(fd, buffer, sizeof buffer, 0);
-    if (n <= 0) break;
-    out.append(buffer, static_cast<std::size_t>(n));
-  }
-  ::close(fd);
-  return out;
+  return test::sendAndRead(port, bytes, wait_s);
 }
 
 int statusOf(const std::string& response) {

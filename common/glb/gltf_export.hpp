@@ -90,4 +90,8 @@ GltfScene posedAvatarScene(const AvatarModel& avatar, std::span<const glm::mat4>
 // The avatar in its rest posture (its prototype skin and rest skeleton).
 GltfScene restAvatarScene(const AvatarModel& avatar);
 
+// Keeps each vertex's `k` largest influences (1..4), renormalised, for viewers that read
+// JOINTS_0/WEIGHTS_0 alone (three.js). A skin with k or fewer is left as it is.
+void keepLargestInfluences(GltfSkin& skin, int k);
+
 }  // namespace vistel

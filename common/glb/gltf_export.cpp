@@ -1,4 +1,4 @@
-#include "offline/gltf/gltf_export.hpp"
+#include "common/glb/gltf_export.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,98 +8,24 @@
 #include <nlohmann/json.hpp>
 
 #include "common/base/file.hpp"
+#include "common/glb/glb_builder.hpp"
+#include "common/glb/glb_container.hpp"
 #include "common/math/transform.hpp"
-#include "offline/gltf/glb_container.hpp"
-#include "offline/gltf/gltf_accessor.hpp"
 
 namespace vistel {
 namespace {
 
 using nlohmann::json;
 
-constexpr int kArrayBuffer = 34962;
-constexpr int kElementArrayBuffer = 34963;
-
 bool finite3(const glm::vec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 
-// The binary chunk and the JSON arrays that describe it.
-class GlbBuilder {
- public:
-  // Appends raw bytes as a new buffer view (4-byte aligned); returns its index.
-  int addView(const void* data, std::size_t size, int target) {
-    while (bin_.size() % 4 != 0) bin_.push_back(0);
-    const std::size_t offset = bin_.size();
-    bin_.resize(offset + size);
-    if (size > 0) std::memcpy(bin_.data() + offset, data, size);
-    json view = {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", size}};
-    if (target != 0) view["target"] = target;
-    views_.push_back(std::move(view));
-    return static_cast<int>(views_.size()) - 1;
-  }
-
-  // A float accessor of `components` per element ("SCALAR", "VEC3", "VEC4", "MAT4"), with
-  // exact min/max when asked.
-  int addFloats(std::span<const float> values, int components, const char* type, int target,
-                bool bounds) {
-    const int view = addView(values.data(), values.size_bytes(), target);
-    json acc = {{"bufferView", view},
-                {"componentType", kGltfFloat},
-                {"count", values.size() / static_cast<std::size_t>(components)},
-                {"type", type}};
-    if (bounds) {
-      std::vector<float> lo(static_cast<std::size_t>(components),
-                            std::numeric_limits<float>::max());
-      std::vector<float> hi(static_cast<std::size_t>(components),
-                            std::numeric_limits<float>::lowest());
-      for (std::size_t i = 0; i < values.size(); ++i) {
-        const std::size_t c = i % static_cast<std::size_t>(components);
-        lo[c] = std::min(lo[c], values[i]);
-        hi[c] = std::max(hi[c], values[i]);
-      }
-      acc["min"] = lo;
-      acc["max"] = hi;
-    }
-    return addAccessor(std::move(acc));
-  }
-
-  int addVec3s(std::span<const glm::vec3> values, int target, bool bounds) {
-    return addFloats(
-        std::span<const float>(reinterpret_cast<const float*>(values.data()), values.size() * 3), 3,
-        "VEC3", target, bounds);
-  }
-
-  int addIndices(std::span<const std::uint32_t> indices) {
-    const int view = addView(indices.data(), indices.size_bytes(), kElementArrayBuffer);
-    return addAccessor({{"bufferView", view},
-                        {"componentType", kGltfUnsignedInt},
-                        {"count", indices.size()},
-                        {"type", "SCALAR"}});
-  }
-
-  int addJoints(std::span<const std::uint16_t> joints) {
-    const int view = addView(joints.data(), joints.size_bytes(), kArrayBuffer);
-    return addAccessor({{"bufferView", view},
-                        {"componentType", kGltfUnsignedShort},
-                        {"count", joints.size() / 4},
-                        {"type", "VEC4"}});
-  }
-
-  int addAccessor(json accessor) {
-    accessors_.push_back(std::move(accessor));
-    return static_cast<int>(accessors_.size()) - 1;
-  }
-
-  std::vector<std::uint8_t>& bin() { return bin_; }
-  json& views() { return views_; }
-  json& accessors() { return accessors_; }
-
- private:
-  std::vector<std::uint8_t> bin_;
-  json views_ = json::array();
-  json accessors_ = json::array();
-};
+int addVec3s(GlbBuilder& b, std::span<const glm::vec3> values, int target, bool bounds) {
+  return b.addFloats(
+      std::span<const float>(reinterpret_cast<const float*>(values.data()), values.size() * 3), 3,
+      "VEC3", target, bounds);
+}
 
 Status checkScene(const GltfScene& scene) {
   const GltfMesh& mesh = scene.mesh;
@@ -296,19 +222,19 @@ Result<std::vector<std::uint8_t>> encodeGlb(const GltfScene& scene) {
   json& attributes = primitive["attributes"];
 
   // Base mesh: positions, unit normals, triangles.
-  attributes["POSITION"] = b.addVec3s(mesh.positions, kArrayBuffer, true);
+  attributes["POSITION"] = addVec3s(b, mesh.positions, kGltfArrayBuffer, true);
   std::vector<glm::vec3> base_normals;
   if (!mesh.normals.empty()) {
     base_normals.resize(nvert);
     for (std::size_t v = 0; v < nvert; ++v) base_normals[v] = unitOrUp(mesh.normals[v]);
-    attributes["NORMAL"] = b.addVec3s(base_normals, kArrayBuffer, true);
+    attributes["NORMAL"] = addVec3s(b, base_normals, kGltfArrayBuffer, true);
   }
   const bool with_uvs = !scene.look.uvs.empty();
   if (with_uvs) {
     attributes["TEXCOORD_0"] =
         b.addFloats(std::span<const float>(reinterpret_cast<const float*>(scene.look.uvs.data()),
                                            scene.look.uvs.size() * 2),
-                    2, "VEC2", kArrayBuffer, false);
+                    2, "VEC2", kGltfArrayBuffer, false);
   }
 
   json nodes = json::array();
@@ -334,8 +260,10 @@ Result<std::vector<std::uint8_t>> encodeGlb(const GltfScene& scene) {
               weights[v * static_cast<std::size_t>(slots) + static_cast<std::size_t>(set) * 4 + s];
         }
       }
-      attributes[fmt::format("JOINTS_{}", set)] = b.addJoints(js);
-      attributes[fmt::format("WEIGHTS_{}", set)] = b.addFloats(ws, 4, "VEC4", kArrayBuffer, false);
+      attributes[fmt::format("JOINTS_{}", set)] =
+          b.addIntegers(js, kGltfUnsignedShort, "VEC4", 4, kGltfArrayBuffer);
+      attributes[fmt::format("WEIGHTS_{}", set)] =
+          b.addFloats(ws, 4, "VEC4", kGltfArrayBuffer, false);
     }
 
     const std::size_t nj = skin.joint_names.size();
@@ -386,11 +314,11 @@ Result<std::vector<std::uint8_t>> encodeGlb(const GltfScene& scene) {
     for (const GltfFrame& frame : scene.frames) {
       json target;
       for (std::size_t v = 0; v < nvert; ++v) delta[v] = frame.positions[v] - mesh.positions[v];
-      target["POSITION"] = b.addVec3s(delta, kArrayBuffer, true);
+      target["POSITION"] = addVec3s(b, delta, kGltfArrayBuffer, true);
       if (with_normals) {
         for (std::size_t v = 0; v < nvert; ++v)
           delta[v] = unitOrUp(frame.normals[v]) - base_normals[v];
-        target["NORMAL"] = b.addVec3s(delta, kArrayBuffer, false);
+        target["NORMAL"] = addVec3s(b, delta, kGltfArrayBuffer, false);
       }
       targets.push_back(std::move(target));
     }
@@ -422,8 +350,9 @@ Result<std::vector<std::uint8_t>> encodeGlb(const GltfScene& scene) {
   json primitives = json::array();
   for (const AvatarSubmesh& sm : effectiveSubmeshes(scene.look, mesh.indices.size())) {
     json prim = primitive;
-    prim["indices"] = b.addIndices(
-        std::span<const std::uint32_t>(mesh.indices).subspan(sm.first_index, sm.index_count));
+    prim["indices"] = b.addIntegers(
+        std::span<const std::uint32_t>(mesh.indices).subspan(sm.first_index, sm.index_count),
+        kGltfUnsignedInt, "SCALAR", 1, kGltfElementArrayBuffer);
     if (sm.material >= 0) prim["material"] = sm.material;
     primitives.push_back(std::move(prim));
   }
@@ -493,6 +422,33 @@ GltfScene posedAvatarScene(const AvatarModel& avatar, std::span<const glm::mat4>
 GltfScene restAvatarScene(const AvatarModel& avatar) {
   const std::vector<glm::mat4> rest = restModelTransforms(avatar.skeleton);
   return posedAvatarScene(avatar, rest, avatar.skin.positions, avatar.skin.normals);
+}
+
+void keepLargestInfluences(GltfSkin& skin, int k) {
+  if (k < 1 || skin.influences <= k) return;
+  const auto from_slots = static_cast<std::size_t>(skin.influences);
+  const auto to_slots = static_cast<std::size_t>(k);
+  const std::size_t nvert = skin.weights.size() / from_slots;
+  std::vector<std::uint16_t> joints(nvert * to_slots, 0);
+  std::vector<float> weights(nvert * to_slots, 0.0f);
+  std::vector<std::size_t> order(from_slots);
+  for (std::size_t v = 0; v < nvert; ++v) {
+    const std::size_t base = v * from_slots;
+    for (std::size_t s = 0; s < from_slots; ++s) order[s] = base + s;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+      return skin.weights[a] > skin.weights[b];
+    });
+    float sum = 0.0f;
+    for (std::size_t s = 0; s < to_slots; ++s) sum += skin.weights[order[s]];
+    for (std::size_t s = 0; s < to_slots; ++s) {
+      joints[v * to_slots + s] = skin.joints[order[s]];
+      weights[v * to_slots + s] =
+          sum > 0.0f ? skin.weights[order[s]] / sum : (s == 0 ? 1.0f : 0.0f);
+    }
+  }
+  skin.influences = k;
+  skin.joints = std::move(joints);
+  skin.weights = std::move(weights);
 }
 
 }  // namespace vistel

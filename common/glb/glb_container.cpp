@@ -1,4 +1,4 @@
-#include "offline/gltf/glb_container.hpp"
+#include "common/glb/glb_container.hpp"
 
 #include "common/base/bytes.hpp"
 
