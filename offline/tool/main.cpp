@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   vistel::registerSolveCommand(app);
   vistel::registerBuildCommand(app);
   vistel::registerDeformCommand(app);
+  vistel::registerCompareCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -28,6 +28,8 @@ void registerBuildCommand(CLI::App& app);
 // vistel-avatar deform AVATAR (--bvh CLIP [--frames A:B] | --rest) [--ball X,Y,Z,R[,VX,VY,VZ]]
 //   [--rigid-only] [--skinning lbs|dqs|ffd|slerp] --out OUT.glb [--forces-csv F]
 void registerDeformCommand(CLI::App& app);
+// vistel-avatar compare A B [--json] [--weld M] [--samples N]
+void registerCompareCommand(CLI::App& app);
 
 // Fits `avatar`'s implicit model (build_command.cpp; shared with deform): the joint map that
 // fits its skeleton from <config>/skeletons, the primitive map from `primitives`. progress
