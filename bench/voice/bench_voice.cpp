@@ -3,8 +3,9 @@
 // MouthToEar/loopback and MouthToEar/loss10_jitter50 run 30 s of synthetic speech
 // (common/voice/speech_synth, with pauses between phrases) through the whole path in
 // simulated time (common/voice/voice_link_sim): capture in 20 ms frames -> voice activity
-// (speexdsp) -> Opus at 24 kbit/s with FEC -> a simulated network -> the playout buffer and
-// decoder -> spatialiser and mixer -> a 20 ms device buffer. Loopback: no loss, no delay;
+// (speexdsp) -> Opus at the default settings (16 kbit/s, wideband, FEC) -> a simulated
+// network -> the playout buffer and decoder -> spatialiser and mixer -> a 20 ms device
+// buffer. Loopback: no loss, no delay;
 // the other: 10% random loss and a delay uniform in [0, 50 ms] (fixed seed). Latency of a
 // frame = when its samples leave the device - when they were captured, including the 20 ms
 // of capture framing and the 20 ms device buffer. Counters: p50_ms, p99_ms, max_ms,

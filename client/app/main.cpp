@@ -291,9 +291,9 @@ int main(int argc, char** argv) {
                  "speak this audio file (WAV) instead of the microphone");
   app.add_option("--audio-out", voice_options.audio_out,
                  "write what is heard to this WAV file (stereo, 48 kHz) instead of the speakers");
-  int voice_kbps = 24;
+  int voice_kbps = 16;
   app.add_option("--voice-kbps", voice_kbps,
-                 "Opus bitrate of the own voice, 16..32 kbit/s (default 24)")
+                 "Opus bitrate of the own voice, 16..32 kbit/s (default 16)")
       ->check(CLI::Range(16, 32));
   app.add_flag("--mute", voice_options.muted, "start with the own voice muted (M toggles)");
   app.add_flag("--no-audio", no_audio, "no voice at all: nothing captured, sent or played");
@@ -596,9 +596,15 @@ int main(int argc, char** argv) {
     }
     // Voice: every head for the spatialiser (self is the listener).
     if (voice) {
+      // A member's avatar: the own one (never in the cache when nobody else offered it) or
+      // the cache's.
+      const auto voice_model = [&](const std::string& hash) {
+        auto found = models.find(hash);
+        return found != models.end() ? found->second : cache->find(hash);
+      };
       voice_scene.begin();
       for (const FrameMember& f : members) {
-        auto model = cache->find(f.avatar_hash);
+        auto model = voice_model(f.avatar_hash);
         Posture own;
         if (f.is_self && sensors) {
           sensors->copyLatest(own);
@@ -610,6 +616,17 @@ int main(int argc, char** argv) {
                         seatPlacement(f.seat));
       }
       voice_scene.commit(*voice);
+      // Lip sync: the jaw (or chin) follows what is heard from each member now, on the
+      // posture drawn (and, headless, the one that would be); the opening goes to the jaw
+      // timeline next to --audio-out.
+      for (FrameMember& f : members) {
+        if (f.is_self || !f.has_posture) continue;
+        if (auto model = voice_model(f.avatar_hash)) {
+          voice->noteMouth(
+              f.id, applyVoiceToPosture(model->skeleton, mouthOpening(voice->speakingLevel(f.id)),
+                                        f.posture));
+        }
+      }
     }
     // Draw (the view skins every avatar in its worker pool).
     if (view) {
@@ -644,12 +661,7 @@ int main(int argc, char** argv) {
         } else if (f.is_self) {
           v.posture = source.latest();
         } else if (f.has_posture) {
-          v.posture = f.posture;
-          // Lip sync: the jaw (or chin) follows what is heard from this member now.
-          if (voice && v.avatar) {
-            applyVoiceToPosture(v.avatar->skeleton, mouthOpening(voice->speakingLevel(f.id)),
-                                v.posture);
-          }
+          v.posture = f.posture;  // with the lip sync applied above
         } else if (v.avatar) {
           v.posture = restPosture(v.avatar->skeleton);
         }

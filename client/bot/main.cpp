@@ -112,9 +112,9 @@ int main(int argc, char** argv) {
                  "audio file (WAV) every participant speaks once live (endlessly with --loop)");
   app.add_option("--audio-out", voice_options.audio_out,
                  "write what the first participant hears to this WAV file (stereo, 48 kHz)");
-  int voice_kbps = 24;
+  int voice_kbps = 16;
   app.add_option("--voice-kbps", voice_kbps,
-                 "Opus bitrate of the own voice, 16..32 kbit/s (default 24)")
+                 "Opus bitrate of the own voice, 16..32 kbit/s (default 16)")
       ->check(CLI::Range(16, 32));
   app.add_flag("--mute", voice_options.muted, "join with the voice muted");
   app.add_flag("--no-audio", no_audio, "no voice at all");

@@ -10,6 +10,7 @@
 #include <spdlog/spdlog.h>
 
 #include "client/voice/audio_device.hpp"
+#include "common/base/file.hpp"
 #include "common/voice/audio_compare.hpp"
 #include "common/voice/mixer.hpp"
 #include "common/voice/speaker_playout.hpp"
@@ -27,6 +28,7 @@ constexpr double kFrameS = static_cast<double>(kVoiceFrameSamples) / kVoiceSampl
 constexpr std::size_t kMaxLatencySamples = 1u << 20;  // 5.8 hours of one speaker
 constexpr double kForgetSpeakerS = 30.0;              // a speaker silent this long is dropped
 constexpr int kClockSamplesBeforeFile = 3;            // pongs before a file input starts
+constexpr std::size_t kMaxMouthSamples = 60 * 3600;   // an hour of jaw openings at 60 Hz
 
 float rms(std::span<const float> x) {
   double sum = 0.0;
@@ -42,6 +44,13 @@ double voicePercentile(std::vector<double> values, double p) {
   const auto i = static_cast<std::size_t>(
       std::clamp(p / 100.0, 0.0, 1.0) * static_cast<double>(values.size() - 1) + 0.5);
   return values[std::min(i, values.size() - 1)];
+}
+
+std::string jawTimelinePath(const std::string& audio_out) {
+  const std::size_t slash = audio_out.find_last_of('/');
+  const std::size_t dot = audio_out.find_last_of('.');
+  const bool has_ext = dot != std::string::npos && (slash == std::string::npos || dot > slash);
+  return (has_ext ? audio_out.substr(0, dot) : audio_out) + ".jaw.csv";
 }
 
 struct VoiceEngine::Speaker {
@@ -114,6 +123,15 @@ struct VoiceEngine::Impl {
   };
   std::unordered_map<std::uint32_t, LevelHistory> levels;
   int level_lag = 0;
+  // Lip sync as drawn (noteMouth), with audio_out only.
+  struct MouthSample {
+    double wav_time = 0.0;  // s in audio_out's timeline
+    std::uint32_t id = 0;
+    float opening = 0.0f;
+  };
+  std::vector<MouthSample> mouth;
+  Clock::time_point start_point;  // the engine's tick 0
+  double t0 = 0.0;                // the same moment, net::monotonicSeconds()
   VoiceReport report;
   net::VoiceCounters counters;
   std::vector<double> latency_ms;
@@ -175,6 +193,13 @@ Result<std::unique_ptr<VoiceEngine>> VoiceEngine::start(std::shared_ptr<net::Net
     }
   }
   m.latency_ms.reserve(4096);
+  // A file's frame k is mixed at tick k and heard from tick k + 1 (speakingLevel).
+  if (options.playback && !options.audio_out.empty()) {
+    m.level_lag = 1;
+    m.mouth.reserve(60 * 600);  // ten minutes of one speaker before it grows
+  }
+  m.start_point = Clock::now();
+  m.t0 = net::monotonicSeconds();
   engine->thread_ = std::thread([e = engine.get()] { e->run(); });
   return engine;
 }
@@ -198,10 +223,20 @@ float VoiceEngine::speakingLevel(std::uint32_t id) const {
   return h.rms[(h.next + n - 1 - static_cast<std::size_t>(impl_->level_lag)) % n];
 }
 
+void VoiceEngine::noteMouth(std::uint32_t id, float opening) {
+  Impl& m = *impl_;
+  if (!m.options.playback || m.options.audio_out.empty()) return;
+  const double wav_time = net::monotonicSeconds() - (m.t0 + kFrameS);
+  std::lock_guard lock(m.mutex);
+  if (m.mouth.size() < kMaxMouthSamples && m.levels.count(id) != 0) {  // speakers heard only
+    m.mouth.push_back({wav_time, id, opening});
+  }
+}
+
 void VoiceEngine::run() {
   Impl& m = *impl_;
-  const Clock::time_point start = Clock::now();
-  const double t0 = net::monotonicSeconds();
+  const Clock::time_point start = m.start_point;
+  const double t0 = m.t0;
   const std::int64_t base = voiceSamplesFromSeconds(t0);
   HeadPose listener;
   std::vector<SpeakerSpot> spots;
@@ -407,6 +442,15 @@ Status VoiceEngine::stop() {
       m.report.seconds_written = static_cast<double>(clip.frames()) / kVoiceSampleRate;
     }
     if (Status st = writeWavFile(m.options.audio_out, clip); !st) return st;
+    std::string csv = "wav_time_s,member,opening\n";
+    {
+      std::lock_guard lock(m.mutex);
+      csv.reserve(csv.size() + 32 * m.mouth.size());
+      for (const Impl::MouthSample& s : m.mouth) {
+        csv += fmt::format("{:.4f},{},{:.4f}\n", s.wav_time, s.id, s.opening);
+      }
+    }
+    if (Status st = writeFileText(jawTimelinePath(m.options.audio_out), csv); !st) return st;
   }
   return {};
 }
@@ -422,6 +466,7 @@ VoiceReport VoiceEngine::report() const {
   r.frames_rejected = m.counters.rejected;
   r.speakers = static_cast<int>(m.report.heard.size() + m.speakers.size());
   r.mouth_to_ear_ms = m.latency_ms;
+  r.mouth_samples = m.mouth.size();
   for (const auto& [id, s] : m.speakers) {
     addTotals(s->playout, r);
     r.heard.push_back(speakerReport(id, s->playout, s->head_space));
@@ -457,6 +502,16 @@ std::string VoiceEngine::summary() const {
 
 std::string VoiceEngine::json() const {
   const VoiceReport r = report();
+  // The jaw timeline's file (a JSON string) and rows (noteMouth), or null without audio_out.
+  std::string jaw = "null";
+  if (impl_->options.playback && !impl_->options.audio_out.empty()) {
+    std::string path;
+    for (const char c : jawTimelinePath(impl_->options.audio_out)) {
+      if (c == '"' || c == '\\') path += '\\';
+      if (static_cast<unsigned char>(c) >= 0x20) path += c;
+    }
+    jaw = fmt::format(R"({{"csv": "{}", "rows": {}}})", path, r.mouth_samples);
+  }
   std::string speakers;
   for (const SpeakerReport& h : r.heard) {
     if (!speakers.empty()) speakers += ", ";
@@ -472,12 +527,13 @@ std::string VoiceEngine::json() const {
       "\"decoded\": {}, \"fec\": {}, \"concealed\": {}, \"late\": {}, \"dropped\": {}, "
       "\"inserted\": {}, \"decode_errors\": {}, \"ticks\": {}, \"late_ticks\": {}, "
       "\"mouth_to_ear_ms\": {{\"count\": {}, \"p50\": {:.2f}, \"p99\": {:.2f}, \"max\": {:.2f}}}, "
-      "\"seconds_written\": {:.3f}, \"payload_kbps\": {:.2f}, \"speakers\": [{}]}}",
+      "\"seconds_written\": {:.3f}, \"payload_kbps\": {:.2f}, \"jaw_timeline\": {}, "
+      "\"speakers\": [{}]}}",
       r.frames_captured, r.frames_sent, r.bytes_sent, r.sent_kbps, r.frames_received,
       r.bytes_received, r.frames_rejected, r.decoded, r.fec, r.concealed, r.late, r.dropped,
       r.inserted, r.decode_errors, r.ticks, r.late_ticks, r.mouth_to_ear_ms.size(),
       voicePercentile(r.mouth_to_ear_ms, 50), voicePercentile(r.mouth_to_ear_ms, 99),
-      voicePercentile(r.mouth_to_ear_ms, 100), r.seconds_written, r.payload_kbps, speakers);
+      voicePercentile(r.mouth_to_ear_ms, 100), r.seconds_written, r.payload_kbps, jaw, speakers);
 }
 
 }  // namespace vistel

@@ -55,7 +55,7 @@ struct VoiceOptions {
   bool loop_input = false;      // a file input starts over at its end (else it ends in silence)
   bool vad = true;              // send only speech (VoiceActivity); false: every frame
   bool denoise = true;          // speexdsp noise suppression on a microphone (never on a file)
-  OpusVoiceSettings opus;       // 24 kbit/s, FEC, 10% loss hint by default
+  OpusVoiceSettings opus;       // 16 kbit/s, wideband, FEC, 10% loss hint by default
   std::string label = "voice";  // names log lines
 };
 
@@ -89,6 +89,7 @@ struct VoiceReport {
   double seconds_written = 0.0;         // to audio_out
   double sent_kbps = 0.0;               // sealed datagrams while speaking (frames_sent * 20 ms)
   double payload_kbps = 0.0;            // the Opus payload alone, while speaking
+  std::uint64_t mouth_samples = 0;      // jaw openings kept for the timeline (noteMouth)
   std::uint64_t payload_bytes_sent = 0;
   std::vector<SpeakerReport> heard;  // speakers still known, by id
 };
@@ -110,10 +111,23 @@ class VoiceEngine {
   // The listener's head and the speakers' heads (room space), as of the latest frame.
   // Speakers without a spot are heard 1 m in front of the listener.
   void setScene(const HeadPose& listener, std::span<const SpeakerSpot> speakers);
-  // The RMS (linear, 0..1) of what a speaker is heard saying in the frame audible now (the
-  // frame written, or with speakers the one written as many ticks ago as are queued before
-  // them): 0 when silent or unknown. Lip sync follows it.
+  // The RMS (linear, 0..1) of what a speaker is heard saying in the frame audible now: 0
+  // when silent or unknown. Lip sync follows it. "Audible now" is on the clock of the
+  // mouth-to-ear latency: a frame mixed at tick k is heard from tick k + 1 (it leaves a
+  // 20 ms output buffer), so with audio_out this is the frame written one tick before the
+  // latest; with speakers, the one written as many ticks ago as are queued before them (the
+  // ring plus PortAudio's output latency, rounded to ticks).
   float speakingLevel(std::uint32_t id) const;
+  // Lip sync, as drawn: the frame loop says how far it opened a speaker's mouth (0..1, what
+  // applyVoiceToPosture applied) on the posture it is about to draw, now. With audio_out the
+  // engine keeps these for members it has heard (216000 rows, an hour of one speaker at
+  // 60 Hz; later ones are dropped) with the time in audio_out's own timeline, and stop()
+  // writes them as jawTimelinePath(audio_out): CSV, a header line then
+  // `wav_time_s,member,opening` per drawn frame and speaker heard, where
+  // wav_time_s is the time (s) of audio_out's sample at wav_time_s * 48000 as heard (its
+  // sample 0 is heard one tick after the engine started), measured on the same monotonic
+  // clock as the engine's ticks. Without audio_out: nothing is kept. Thread-safe, O(1).
+  void noteMouth(std::uint32_t id, float opening);
 
   // Stops the thread and writes audio_out (if given). Idempotent.
   Status stop();
@@ -134,6 +148,10 @@ class VoiceEngine {
   std::thread thread_;
   bool stopped_ = false;
 };
+
+// Where the jaw timeline of an audio_out file goes: "DIR/heard.wav" -> "DIR/heard.jaw.csv"
+// (the extension, if any, replaced).
+std::string jawTimelinePath(const std::string& audio_out);
 
 // p-th percentile (0..100) of values (copied and sorted); 0 for none.
 double voicePercentile(std::vector<double> values, double p);

@@ -61,9 +61,9 @@ float mouthOpening(float rms) {
   return std::clamp((db + 50.0f) / 30.0f, 0.0f, 1.0f);
 }
 
-void applyVoiceToPosture(const Skeleton& skeleton, float opening, Posture& posture) {
+float applyVoiceToPosture(const Skeleton& skeleton, float opening, Posture& posture) {
   if (!(opening > 0.0f) || static_cast<int>(posture.rotations.size()) != skeleton.jointCount()) {
-    return;
+    return 0.0f;
   }
   opening = std::min(opening, 1.0f);
   int joint = jawJoint(skeleton);
@@ -74,11 +74,12 @@ void applyVoiceToPosture(const Skeleton& skeleton, float opening, Posture& postu
     joint = voiceHeadJoint(skeleton);
     angle = -kChinLiftRad * opening;
   }
-  if (joint < 0) return;
+  if (joint < 0) return 0.0f;
   const glm::vec3 axis =
       glm::normalize(glm::inverse(restModelRotation(skeleton, joint)) * glm::vec3(1, 0, 0));
   auto& r = posture.rotations[static_cast<std::size_t>(joint)];
   r = glm::normalize(r * glm::angleAxis(angle, axis));
+  return opening;
 }
 
 }  // namespace vistel

@@ -10,7 +10,9 @@
 // Lip sync (applyVoiceToPosture): a speaking avatar's jaw opens with the level of what the
 // listener hears from it now (VoiceEngine::speakingLevel: the RMS of the 20 ms frame
 // playing), so mouth and sound move together within a frame or two; an avatar without a jaw
-// joint (the canonical humanoid has none) lifts its chin instead, a few degrees.
+// joint (the canonical humanoid has none) lifts its chin instead, a few degrees. The frame
+// loop reports each opening it draws (VoiceEngine::noteMouth) for the jaw timeline that
+// tests/voice_session cross-correlates with the audio written.
 #pragma once
 
 #include <cstdint>
@@ -41,8 +43,9 @@ class VoiceScene {
 // How far a voice at `rms` (linear) opens a mouth: 0 at -50 dBFS or below, 1 at -20 dBFS.
 float mouthOpening(float rms);
 // Opens the jaw (a joint whose name contains "jaw", up to 20 degrees) or else lifts the
-// head (up to 6 degrees) by `opening` (0..1), on the posture's local rotations. A posture
-// of another joint count is left as it is.
-void applyVoiceToPosture(const Skeleton& skeleton, float opening, Posture& posture);
+// head (up to 6 degrees) by `opening` (0..1), on the posture's local rotations. Returns the
+// opening applied (0..1): 0 when the posture was left as it is (no opening, a posture of
+// another joint count, neither a jaw nor a head joint).
+float applyVoiceToPosture(const Skeleton& skeleton, float opening, Posture& posture);
 
 }  // namespace vistel

@@ -21,7 +21,7 @@ Result<OpusVoiceEncoder> OpusVoiceEncoder::create(const OpusVoiceSettings& setti
   }
   int err = OPUS_OK;
   OpusVoiceEncoder result;
-  result.encoder_.reset(opus_encoder_create(kVoiceSampleRate, 1, OPUS_APPLICATION_VOIP, &err));
+  result.encoder_.reset(opus_encoder_create(kVoiceSampleRate, 1, OPUS_APPLICATION_AUDIO, &err));
   if (err != OPUS_OK || !result.encoder_) {
     return fail("opus voice encoder: {}", opus_strerror(err));
   }
@@ -31,6 +31,9 @@ Result<OpusVoiceEncoder> OpusVoiceEncoder::create(const OpusVoiceSettings& setti
   opus_encoder_ctl(enc, OPUS_SET_DTX(settings.dtx ? 1 : 0));
   opus_encoder_ctl(enc, OPUS_SET_COMPLEXITY(settings.complexity));
   opus_encoder_ctl(enc, OPUS_SET_VBR(1));
+  opus_encoder_ctl(enc, OPUS_SET_VBR_CONSTRAINT(1));
+  opus_encoder_ctl(enc, OPUS_SET_MAX_BANDWIDTH(settings.wideband ? OPUS_BANDWIDTH_WIDEBAND
+                                                                 : OPUS_BANDWIDTH_FULLBAND));
   result.settings_ = settings;
   if (auto status = result.setBitrate(settings.bitrate_bps); !status) return status.error();
   if (auto status = result.setExpectedLoss(settings.expected_loss_percent); !status) {

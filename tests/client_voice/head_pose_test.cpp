@@ -92,10 +92,10 @@ TEST(LipSync, TheMouthOpensWithTheLevelHeard) {
   const Skeleton s = skeleton();
   HeadPoser poser(s);
   Posture p = restPosture(s);
-  applyVoiceToPosture(s, 0.0f, p);  // silent: nothing moves
+  EXPECT_EQ(applyVoiceToPosture(s, 0.0f, p), 0.0f);  // silent: nothing moves
   expectNear(poser.pose(s, p, glm::mat4(1.0f)).orientation * glm::vec3(0, 0, 1), {0, 0, 1});
   // No jaw joint: the chin lifts (the face turns up), by at most 6 degrees.
-  applyVoiceToPosture(s, 1.0f, p);
+  EXPECT_EQ(applyVoiceToPosture(s, 1.0f, p), 1.0f);
   const glm::vec3 face = poser.pose(s, p, glm::mat4(1.0f)).orientation * glm::vec3(0, 0, 1);
   EXPECT_GT(face.y, 0.05f);
   EXPECT_LT(face.y, std::sin(0.11f));
@@ -109,7 +109,7 @@ TEST(LipSync, AJawJointOpensDownwards) {
   s.parents[3] = 2;
   computeInverseBind(s);
   Posture p = restPosture(s);
-  applyVoiceToPosture(s, 1.0f, p);
+  EXPECT_EQ(applyVoiceToPosture(s, 1.5f, p), 1.0f);        // clamped to 0..1
   EXPECT_EQ(p.rotations[2], restPosture(s).rotations[2]);  // the head stays
   std::vector<glm::mat4> model(4);
   poseSkeleton(s, p, model);
@@ -118,6 +118,20 @@ TEST(LipSync, AJawJointOpensDownwards) {
   const glm::vec3 forward =
       glm::mat3(model[3]) * glm::inverse(glm::mat3(rest[3])) * glm::vec3(0, 0, 1);
   EXPECT_LT(forward.y, -0.3f);
+}
+
+TEST(LipSync, APostureOfAnotherSkeletonIsLeftAsItIs) {
+  const Skeleton s = skeleton();
+  Posture p;
+  p.rotations.assign(2, glm::quat(1, 0, 0, 0));
+  EXPECT_EQ(applyVoiceToPosture(s, 1.0f, p), 0.0f);
+  EXPECT_EQ(p.rotations[0], glm::quat(1, 0, 0, 0));
+}
+
+TEST(LipSync, TheJawTimelineGoesNextToTheWavWritten) {
+  EXPECT_EQ(jawTimelinePath("out/frames/heard.wav"), "out/frames/heard.jaw.csv");
+  EXPECT_EQ(jawTimelinePath("heard"), "heard.jaw.csv");
+  EXPECT_EQ(jawTimelinePath("a.b/heard"), "a.b/heard.jaw.csv");
 }
 
 }  // namespace
