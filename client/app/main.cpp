@@ -9,7 +9,7 @@
 //                  | --source recording:FILE.vrec] [--record FILE.vrec]
 //                 [--forces-out FILE.csv] [--force-feedback SENSORS.toml] [--log-level LEVEL]
 //                 [--netsim SPEC] [--record-room FILE.glb] [--audio-in FILE.wav]
-//                 [--audio-out FILE.wav] [--mute] [--no-audio]
+//                 [--audio-out FILE.wav] [--mute] [--no-audio] [--no-echo-cancel]
 //   vistel-client --version   (the project version and the protocol versions it speaks)
 //
 // With sensors (client/app/sensor_input.hpp) a sensor thread reads the devices (or the
@@ -297,6 +297,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(16, 32));
   app.add_flag("--mute", voice_options.muted, "start with the own voice muted (M toggles)");
   app.add_flag("--no-audio", no_audio, "no voice at all: nothing captured, sent or played");
+  bool no_echo_cancel = false;
+  app.add_flag("--no-echo-cancel", no_echo_cancel,
+               "keep what the speakers play in the microphone's capture (headphones)");
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error, off (default: info)");
   app.set_version_flag("--version",
@@ -468,6 +471,7 @@ int main(int argc, char** argv) {
   auto driver = NetDriver::create(io, *server, settings, cache, {}, tls_settings);
   driver->setNetSim(*netsim);
   voice_options.opus.bitrate_bps = 1000 * voice_kbps;
+  voice_options.echo_cancel = !no_echo_cancel;
   // Voice: its own thread on a 20 ms grid (client/voice).
   std::unique_ptr<VoiceEngine> voice;
   if (!no_audio) {

@@ -12,6 +12,7 @@
 #include "client/voice/audio_device.hpp"
 #include "common/base/file.hpp"
 #include "common/voice/audio_compare.hpp"
+#include "common/voice/echo_canceller.hpp"
 #include "common/voice/mixer.hpp"
 #include "common/voice/speaker_playout.hpp"
 #include "common/voice/voice_activity.hpp"
@@ -97,6 +98,8 @@ struct VoiceEngine::Impl {
   bool device_in = false;
   bool device_out = false;
   std::optional<VoiceActivity> vad;
+  std::optional<EchoCanceller> echo;  // microphone and speakers both open
+  std::vector<float> played = std::vector<float>(kVoiceFrameSamples);  // last tick's, mono
   std::optional<OpusVoiceEncoder> encoder;
   bool talking = false;            // the previous frame was sent
   std::uint32_t capture_time = 0;  // of the last frame sent
@@ -184,6 +187,11 @@ Result<std::unique_ptr<VoiceEngine>> VoiceEngine::start(std::shared_ptr<net::Net
       m.device_in = want_in && m.device->description().find("input:") != std::string::npos;
       m.device_out = want_out && m.device->description().find("output:") != std::string::npos;
       spdlog::info("{}: audio device {}", options.label, m.device->description());
+      if (m.device_in && m.device_out && options.echo_cancel) {
+        auto echo = EchoCanceller::create();
+        if (!echo) return echo.error();
+        m.echo.emplace(std::move(*echo));
+      }
     } else {
       spdlog::warn("{}: {}; carrying on without audio device ({})", options.label,
                    device.error().message,
@@ -283,6 +291,9 @@ void VoiceEngine::run() {
         }
       } else if (m.device_in) {
         have_frame = m.device->readFrame(m.frame);
+        // The speakers' last frame reaches the microphone through the room: removed here,
+        // the device's latency learnt by the canceller's filter.
+        if (have_frame && m.echo) m.echo->cancel(m.frame, m.played);
       }
     }
     bool sent = false;
@@ -399,6 +410,11 @@ void VoiceEngine::run() {
         m.output.insert(m.output.end(), m.stereo.begin(), m.stereo.end());
       } else if (m.device_out) {
         m.device->writeFrame(m.stereo);
+        for (int i = 0; i < kVoiceFrameSamples; ++i) {
+          m.played[static_cast<std::size_t>(i)] =
+              0.5f * (m.stereo[2 * static_cast<std::size_t>(i)] +
+                      m.stereo[2 * static_cast<std::size_t>(i) + 1]);
+        }
         // Lip sync: what the speakers play now left the mixer this many ticks ago.
         const double queued = m.device->playbackLatencySeconds();
         std::lock_guard lock(m.mutex);

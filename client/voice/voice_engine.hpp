@@ -55,6 +55,8 @@ struct VoiceOptions {
   bool loop_input = false;      // a file input starts over at its end (else it ends in silence)
   bool vad = true;              // send only speech (VoiceActivity); false: every frame
   bool denoise = true;          // speexdsp noise suppression on a microphone (never on a file)
+  bool echo_cancel = true;      // with a microphone and speakers: remove what the speakers
+                                // play from the capture (common/voice/echo_canceller)
   OpusVoiceSettings opus;       // 16 kbit/s, wideband, FEC, 10% loss hint by default
   std::string label = "voice";  // names log lines
 };
