@@ -48,17 +48,17 @@ Status checkRecordPath(const std::string& path) {
 
 RoomRecorder::RoomRecorder(RecorderOptions options) : options_(options) {}
 
-RecordedMember& RoomRecorder::memberFor(const net::RemoteMember& m) {
-  const std::string key = m.name + '\n' + m.avatar_hash;
+RecordedMember& RoomRecorder::memberFor(const std::string& name, const std::string& avatar_hash) {
+  const std::string key = name + '\n' + avatar_hash;
   auto found = member_index_.find(key);
   if (found != member_index_.end()) return recording_.members[found->second];
   // A new member (a name seen again with another avatar is another member).
   RecordedMember rec;
-  rec.name = m.name;
+  rec.name = name;
   for (const RecordedMember& other : recording_.members) {
-    if (other.name == m.name) rec.name = fmt::format("{} ({})", m.name, recording_.members.size());
+    if (other.name == name) rec.name = fmt::format("{} ({})", name, recording_.members.size());
   }
-  rec.avatar_hash = m.avatar_hash;
+  rec.avatar_hash = avatar_hash;
   rec.seat_translation = Vec3Track(options_.translation_tolerance_m);
   rec.seat_rotation = QuatTrack(options_.rotation_tolerance_rad);
   rec.root_translation = Vec3Track(options_.translation_tolerance_m);
@@ -68,15 +68,15 @@ RecordedMember& RoomRecorder::memberFor(const net::RemoteMember& m) {
   return recording_.members.back();
 }
 
-RecordedProp& RoomRecorder::propFor(const net::RemoteProp& p) {
-  auto found = prop_index_.find(p.id);
+RecordedProp& RoomRecorder::propFor(std::uint32_t id, const BallSpec& ball) {
+  auto found = prop_index_.find(id);
   if (found != prop_index_.end()) return recording_.props[found->second];
   RecordedProp rec;
-  rec.id = p.id;
+  rec.id = id;
   rec.name = fmt::format("ball {}", recording_.props.size() + 1);
-  rec.ball = p.ball;
+  rec.ball = ball;
   rec.position = Vec3Track(options_.translation_tolerance_m);
-  prop_index_.emplace(p.id, recording_.props.size());
+  prop_index_.emplace(id, recording_.props.size());
   prop_seen_.push_back(-1);
   recording_.props.push_back(std::move(rec));
   return recording_.props.back();
@@ -106,19 +106,7 @@ void RoomRecorder::addPosture(RecordedMember& rec, const net::Seat& seat, const 
 
 void RoomRecorder::sample(const net::ClientSession& session, double now, double play_time,
                           const Posture& own) {
-  if (!due(now)) return;
-  const double rate = options_.rate_hz > 0.0       ? options_.rate_hz
-                      : session.tickRateHz() > 0.0 ? session.tickRateHz()
-                                                   : kDefaultRateHz;
-  // Samples on a grid of the interval; a frame up to a quarter interval early takes its
-  // grid point, and a stall longer than an interval restarts the grid.
-  const bool first = interval_ <= 0.0;
-  interval_ = 1.0 / rate;
-  next_due_ = first ? now + interval_ : next_due_ + interval_;
-  if (next_due_ < now) next_due_ = now + interval_;
-  const double t = start_ < 0.0 ? 0.0 : now - start_;
-  if (start_ >= 0.0 && !(t > last_t_)) return;
-
+  if (!beginSample(now, session.tickRateHz())) return;
   // Members: the posture each shows now (remote: the jitter buffer at the playback time).
   for (const auto& member : session.members()) {
     const net::RemoteMember& m = *member;
@@ -129,28 +117,57 @@ void RoomRecorder::sample(const net::ClientSession& session, double now, double 
                net::JitterBuffer::Shown::kNone) {
       posture = &scratch_;
     }
-    if (posture == nullptr || posture->rotations.empty()) continue;
-    if (start_ < 0.0) start_ = now;
-    RecordedMember& rec = memberFor(m);
-    const std::size_t index = static_cast<std::size_t>(&rec - recording_.members.data());
-    if (!spanOpen(rec.spans)) rec.spans.push_back({t, -1.0});
-    member_seen_[index] = stamp_;
-    addPosture(rec, m.seat, *posture, t);
+    if (posture != nullptr) addMember(m.name, m.avatar_hash, m.seat, *posture);
   }
-
   // Props: their centres at the playback time.
   for (const auto& prop : session.props()) {
     net::PropSample state;
-    if (!prop->track.sample(play_time, state)) continue;
-    if (start_ < 0.0) start_ = now;
-    RecordedProp& rec = propFor(*prop);
-    const std::size_t index = static_cast<std::size_t>(&rec - recording_.props.data());
-    if (!spanOpen(rec.spans)) rec.spans.push_back({t, -1.0});
-    prop_seen_[index] = stamp_;
-    rec.position.add(t, state.position);
+    if (prop->track.sample(play_time, state)) addProp(prop->id, prop->ball, state.position);
   }
-  if (start_ < 0.0) return;  // nothing shown yet: the recording has not started
+  endSample();
+}
 
+bool RoomRecorder::beginSample(double now, double rate_hz) {
+  if (!due(now)) return false;
+  const double rate = options_.rate_hz > 0.0 ? options_.rate_hz
+                      : rate_hz > 0.0        ? rate_hz
+                                             : kDefaultRateHz;
+  // Samples on a grid of the interval; a frame up to a quarter interval early takes its
+  // grid point, and a stall longer than an interval restarts the grid.
+  const bool first = interval_ <= 0.0;
+  interval_ = 1.0 / rate;
+  next_due_ = first ? now + interval_ : next_due_ + interval_;
+  if (next_due_ < now) next_due_ = now + interval_;
+  const double t = start_ < 0.0 ? 0.0 : now - start_;
+  if (start_ >= 0.0 && !(t > last_t_)) return false;
+  sample_now_ = now;
+  sample_t_ = t;
+  return true;
+}
+
+void RoomRecorder::addMember(const std::string& name, const std::string& avatar_hash,
+                             const net::Seat& seat, const Posture& posture) {
+  if (posture.rotations.empty()) return;
+  if (start_ < 0.0) start_ = sample_now_;
+  RecordedMember& rec = memberFor(name, avatar_hash);
+  const std::size_t index = static_cast<std::size_t>(&rec - recording_.members.data());
+  if (!spanOpen(rec.spans)) rec.spans.push_back({sample_t_, -1.0});
+  member_seen_[index] = stamp_;
+  addPosture(rec, seat, posture, sample_t_);
+}
+
+void RoomRecorder::addProp(std::uint32_t id, const BallSpec& ball, const glm::vec3& position) {
+  if (start_ < 0.0) start_ = sample_now_;
+  RecordedProp& rec = propFor(id, ball);
+  const std::size_t index = static_cast<std::size_t>(&rec - recording_.props.data());
+  if (!spanOpen(rec.spans)) rec.spans.push_back({sample_t_, -1.0});
+  prop_seen_[index] = stamp_;
+  rec.position.add(sample_t_, position);
+}
+
+void RoomRecorder::endSample() {
+  if (start_ < 0.0) return;  // nothing shown yet: the recording has not started
+  const double t = sample_t_;
   // Whoever was shown before but not in this sample has gone: its span ends here.
   for (std::size_t i = 0; i < recording_.members.size(); ++i) {
     RecordedMember& rec = recording_.members[i];

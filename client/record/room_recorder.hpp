@@ -101,6 +101,17 @@ class RoomRecorder {
   // Allocation-free once every track exists, but for keys and window growth.
   void sample(const net::ClientSession& session, double now, double play_time, const Posture& own);
 
+  // sample() in parts, for callers that hold no ClientSession (the server's recorder,
+  // server/record): beginSample() when a sample is due at `now` (rate_hz: the room's rate,
+  // used when options.rate_hz is 0), then addMember() / addProp() for everything shown at
+  // that moment, then endSample(). beginSample() returns false when no sample is due (call
+  // neither of the others then). A member is keyed by name and avatar hash as in sample().
+  bool beginSample(double now, double rate_hz);
+  void addMember(const std::string& name, const std::string& avatar_hash, const net::Seat& seat,
+                 const Posture& posture);
+  void addProp(std::uint32_t id, const BallSpec& ball, const glm::vec3& position);
+  void endSample();
+
   // True when sample() would record at `now` (to skip copying the own posture otherwise).
   bool due(double now) const { return now >= next_due_ - 0.25 * interval_; }
 
@@ -116,8 +127,8 @@ class RoomRecorder {
   const RoomRecording& recording() const { return recording_; }
 
  private:
-  RecordedMember& memberFor(const net::RemoteMember& m);
-  RecordedProp& propFor(const net::RemoteProp& p);
+  RecordedMember& memberFor(const std::string& name, const std::string& avatar_hash);
+  RecordedProp& propFor(std::uint32_t id, const BallSpec& ball);
   void addPosture(RecordedMember& rec, const net::Seat& seat, const Posture& posture, double t);
 
   RecorderOptions options_;
@@ -126,11 +137,13 @@ class RoomRecorder {
   std::unordered_map<std::uint32_t, std::size_t> prop_index_;
   std::vector<std::int64_t> member_seen_;  // last sample index each member was shown
   std::vector<std::int64_t> prop_seen_;
-  std::int64_t stamp_ = 0;  // samples taken so far
-  double start_ = -1.0;     // caller's time of recording t = 0 (< 0: not started)
-  double last_t_ = 0.0;     // recording time of the last sample
-  double next_due_ = 0.0;   // caller's time of the next grid point
-  double interval_ = 0.0;   // seconds between samples (0: none taken yet)
+  std::int64_t stamp_ = 0;   // samples taken so far
+  double start_ = -1.0;      // caller's time of recording t = 0 (< 0: not started)
+  double last_t_ = 0.0;      // recording time of the last sample
+  double next_due_ = 0.0;    // caller's time of the next grid point
+  double interval_ = 0.0;    // seconds between samples (0: none taken yet)
+  double sample_now_ = 0.0;  // the sample in progress (beginSample): caller's time ...
+  double sample_t_ = 0.0;    // ... and recording time (0 until the recording starts)
   Posture scratch_;
   net::PropModels prop_models_;
 };

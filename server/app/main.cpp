@@ -18,6 +18,10 @@
 // --web-port P (or [web] port) serves the room list, spectator pages and avatars over HTTP
 // and WebSocket on that TCP port (0: a free one, printed as "vistel-server web on
 // http://ADDRESS:PORT/"); server/web/web_server.hpp.
+// --record-room DIR records every room as a skinned glTF animation DIR/<room>-<start>.glb,
+// written when the room empties or the server stops (server/record/server_recorder.hpp);
+// --record-rate HZ samples per second (default 30), --record-max-s S caps each room's
+// recording (default 1800 s; a warning when reached).
 #include <atomic>
 #include <cstdio>
 #include <memory>
@@ -37,6 +41,7 @@
 #include "server/http/agones_sdk.hpp"
 #include "server/http/http_endpoint.hpp"
 #include "server/http/prometheus.hpp"
+#include "server/record/server_recorder.hpp"
 #include "server/shell/asio.hpp"
 #include "server/shell/server_shell.hpp"
 #include "server/web/web_config.hpp"
@@ -72,6 +77,17 @@ int main(int argc, char** argv) {
                  "HTTP and WebSocket on this TCP port (0: a free port; default from config "
                  "[web] port: none)")
       ->check(CLI::Range(0, 65535));
+  ServerRecordOptions record_options;
+  app.add_option("--record-room", record_options.dir,
+                 "record every room as a skinned glTF animation DIR/<room>-<start>.glb, "
+                 "written when the room empties or the server stops (DIR must exist)");
+  app.add_option("--record-rate", record_options.rate_hz,
+                 "--record-room samples per second (default 30)")
+      ->check(CLI::Range(1.0, 240.0));
+  app.add_option("--record-max-s", record_options.max_duration_s,
+                 "--record-room: seconds recorded per room at most (default 1800; a warning "
+                 "when reached)")
+      ->check(CLI::PositiveNumber);
   app.add_flag("--agones", agones,
                "report to the Agones SDK sidecar at localhost:$AGONES_SDK_HTTP_PORT");
   std::string secret_file;
@@ -178,11 +194,17 @@ int main(int argc, char** argv) {
   // Health, readiness and metrics; the orchestrator's sidecar.
   std::atomic<bool> ready{false};
   std::unique_ptr<HttpEndpoint> http;
+  std::unique_ptr<WebServer> web;  // started below; its figures join /metrics
   if (metrics_port >= 0) {
     HttpHandlers handlers;
     handlers.ready = [&ready] { return ready.load(); };
-    handlers.metrics = [&shell, &ready](MetricsReply reply) {
-      shell.collectMetrics(std::move(reply), ready.load());
+    handlers.metrics = [&shell, &ready, &web](MetricsReply reply) {
+      shell.collectMetrics(
+          [&web, reply = std::move(reply)](std::string text) {
+            if (web) text += formatPrometheus(web->metricFamilies());
+            reply(std::move(text));
+          },
+          ready.load());
     };
     auto started = HttpEndpoint::start(io, config->bind_address,
                                        static_cast<std::uint16_t>(metrics_port), handlers);
@@ -195,7 +217,6 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
   }
   // Spectators: the room list, pages and WebSockets (server/web).
-  std::unique_ptr<WebServer> web;
   if (web_config->port >= 0) {
     WebServerOptions web_options;
     web_options.config = *web_config;
@@ -211,6 +232,19 @@ int main(int argc, char** argv) {
     web = std::move(*started);
     std::printf("vistel-server web on http://%s/\n", web->localAddress().c_str());
     std::fflush(stdout);
+  }
+  // Recordings of the rooms (server/record).
+  std::unique_ptr<ServerRecorder> recorder;
+  if (!record_options.dir.empty()) {
+    record_options.seat_layout = config->seat_layout;
+    auto started = ServerRecorder::start(io, shell, record_options);
+    if (!started) {
+      spdlog::error("{}", started.error().message);
+      return 1;
+    }
+    recorder = std::move(*started);
+    spdlog::info("recording rooms into {} ({} samples/s, at most {} s per room)",
+                 record_options.dir, record_options.rate_hz, record_options.max_duration_s);
   }
   std::unique_ptr<AgonesSdk> sdk;
   if (agones) {
@@ -243,6 +277,7 @@ int main(int argc, char** argv) {
     ready = false;
     if (http) http->stop();
     if (web) web->stop();
+    if (recorder) recorder->stop();
     if (sdk) sdk->stop();
     shell.stop();
   });
@@ -264,6 +299,13 @@ int main(int argc, char** argv) {
   http.reset();
   web.reset();
   sdk.reset();
+  if (recorder) {
+    // The rooms still open when the server stopped.
+    recorder->writeAll();
+    const ServerRecorder::Stats rs = recorder->stats();
+    spdlog::info("record: {} files written, {} failed", rs.files_written, rs.write_errors);
+    recorder.reset();
+  }
   if (!stats_json.empty()) {
     if (Status st = writeFileText(stats_json, shell.loadJson() + "\n"); !st) {
       spdlog::error("--stats-json: {}", st.error().message);

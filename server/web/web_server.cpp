@@ -51,6 +51,28 @@ void guarded(const char* where, F&& f) {
 
 beast::string_view bsv(std::string_view s) { return {s.data(), s.size()}; }
 
+// Indices into WebServer::kRouteClasses.
+constexpr std::size_t kWebSocketRoute = 4;
+constexpr std::size_t kOtherRoute = 5;
+std::size_t routeClass(WebRoute route) {
+  switch (route) {
+    case WebRoute::kRoomList:
+    case WebRoute::kRoomsJson:
+      return 0;
+    case WebRoute::kRoomPage:
+      return 1;
+    case WebRoute::kAsset:
+      return 2;
+    case WebRoute::kAvatar:
+      return 3;
+    case WebRoute::kRoomSocket:
+      return kWebSocketRoute;
+    case WebRoute::kNotFound:
+      break;
+  }
+  return kOtherRoute;
+}
+
 // Something stop() must close.
 struct Closable {
   virtual ~Closable() = default;
@@ -93,6 +115,19 @@ struct WebServer::State : std::enable_shared_from_this<WebServer::State> {
   void count(std::uint64_t Stats::*field, std::uint64_t n = 1) {
     std::lock_guard lock(mutex);
     stats.*field += n;
+  }
+  // An answer of `status` to a request of route class `route` (WebServer::kRouteClasses).
+  void answered(std::size_t route, int status) {
+    const int status_class = std::clamp(status / 100, 1, 5) - 1;
+    std::lock_guard lock(mutex);
+    ++stats.answers[std::min<std::size_t>(route, stats.answers.size() - 1)]
+                   [static_cast<std::size_t>(status_class)];
+  }
+  void refused(std::string_view reason) {
+    std::lock_guard lock(mutex);
+    auto it = stats.refusals.find(reason);
+    if (it == stats.refusals.end()) it = stats.refusals.emplace(std::string(reason), 0).first;
+    ++it->second;
   }
   // The .glb of an avatar (cached), or null; reply on any thread.
   void avatarGlbOf(const std::string& hash,
@@ -187,6 +222,7 @@ class WsSession : public Closable, public std::enable_shared_from_this<WsSession
   };
 
   void onAccept(beast::error_code ec) {
+    state_->answered(kWebSocketRoute, ec ? 400 : 101);
     if (ec) {
       finish();
       return;
@@ -209,6 +245,7 @@ class WsSession : public Closable, public std::enable_shared_from_this<WsSession
         spdlog::info("web: spectator of room '{}' from {} refused: {}", room_, admission_->address,
                      why);
         state_->count(&WebServer::Stats::unauthorized);
+        state_->refused("token");
         enqueue(std::make_shared<const std::string>(statusJson("unauthorized", why)), false);
         close_after_flush_ = true;
         close_code_ = websocket::close_code::policy_error;
@@ -217,6 +254,7 @@ class WsSession : public Closable, public std::enable_shared_from_this<WsSession
       }
     }
     if (!state_->joinFeed(room_, shared_from_this())) {
+      state_->refused("spectators per room");
       enqueue(std::make_shared<const std::string>(
                   statusJson("full", "too many spectators in this room; try again later")),
               false);
@@ -226,6 +264,7 @@ class WsSession : public Closable, public std::enable_shared_from_this<WsSession
       return;
     }
     joined_ = true;
+    state_->count(&WebServer::Stats::spectators_open);
     read();
   }
 
@@ -275,8 +314,9 @@ class WsSession : public Closable, public std::enable_shared_from_this<WsSession
     writing_ = true;
     ws_.binary(queue_.front().binary);
     ws_.async_write(asio::buffer(*queue_.front().bytes),
-                    [self = shared_from_this()](beast::error_code ec, std::size_t) {
+                    [self = shared_from_this()](beast::error_code ec, std::size_t n) {
                       self->writing_ = false;
+                      self->state_->count(&WebServer::Stats::ws_bytes_sent, n);
                       const bool binary = self->queue_.front().binary;
                       self->queued_bytes_ -= self->queue_.front().bytes->size();
                       self->queue_.pop_front();
@@ -316,6 +356,8 @@ class WsSession : public Closable, public std::enable_shared_from_this<WsSession
     if (joined_) {
       joined_ = false;
       state_->leaveFeed(room_, this);
+      std::lock_guard lock(state_->mutex);
+      --state_->stats.spectators_open;
     }
     beast::error_code ignored;
     beast::get_lowest_layer(ws_).socket().close(ignored);
@@ -561,6 +603,7 @@ class HttpSession : public Closable, public std::enable_shared_from_this<HttpSes
   using Response = http::response<http::span_body<const char>>;
 
   void readHead(double timeout_s) {
+    route_class_ = kOtherRoute;
     parser_.emplace();
     configureHeadParser(*parser_, state_->options.config.max_header_bytes);
     stream_.expires_after(seconds(timeout_s));
@@ -601,6 +644,7 @@ class HttpSession : public Closable, public std::enable_shared_from_this<HttpSes
     const auto& req = parser_->get();
     keep_alive_ = req.keep_alive();
     RequestVerdict verdict = judgeRequest(requestHeadOf(req));
+    route_class_ = routeClass(verdict.target.route);
     if (verdict.status != 0) {
       const bool keep =
           (verdict.status == 404 || verdict.status == 426) && !requestHeadOf(req).has_body;
@@ -683,6 +727,8 @@ class HttpSession : public Closable, public std::enable_shared_from_this<HttpSes
 
   void respondError(int status, std::string_view reason, bool keep) {
     state_->count(&WebServer::Stats::errors);
+    // 429 is counted by WebLimits ("request rate"); a 404 is an answer, not a refusal.
+    if (status != 404 && status != 429 && status < 500) state_->refused("bad request");
     auto body = std::make_shared<const std::string>(
         fmt::format("{} {}: {}\n", status, statusText(status), reason));
     if (!keep) keep_alive_ = false;
@@ -694,6 +740,7 @@ class HttpSession : public Closable, public std::enable_shared_from_this<HttpSes
                std::shared_ptr<const void> keep, std::string_view cache, bool html,
                std::string_view etag = {}) {
     state_->count(&WebServer::Stats::requests);
+    state_->answered(route_class_, status);
     keep_ = std::move(keep);
     auto res = std::make_shared<Response>();
     res->result(static_cast<unsigned>(status));
@@ -716,8 +763,9 @@ class HttpSession : public Closable, public std::enable_shared_from_this<HttpSes
     res->prepare_payload();
     stream_.expires_after(seconds(state_->options.config.write_timeout_s));
     http::async_write(stream_, *res,
-                      [self = shared_from_this(), res](beast::error_code ec, std::size_t) {
+                      [self = shared_from_this(), res](beast::error_code ec, std::size_t n) {
                         self->keep_.reset();
+                        self->state_->count(&WebServer::Stats::http_bytes_sent, n);
                         if (ec) {
                           if (ec == beast::error::timeout) {
                             self->state_->count(&WebServer::Stats::timed_out);
@@ -741,6 +789,7 @@ class HttpSession : public Closable, public std::enable_shared_from_this<HttpSes
   beast::tcp_stream::executor_type executor_;  // its strand (kept: stream_ may be moved away)
   std::uint64_t id_;
   bool upgraded_ = false;
+  std::size_t route_class_ = kOtherRoute;
   beast::flat_buffer buffer_;
   std::optional<HeadParser> parser_;
   bool keep_alive_ = false;
@@ -829,6 +878,70 @@ std::string WebServer::localAddress() const {
 WebServer::Stats WebServer::stats() const {
   std::lock_guard lock(state_->mutex);
   return state_->stats;
+}
+
+std::vector<MetricFamily> WebServer::metricFamilies() const {
+  Stats s;
+  std::map<std::string, std::uint64_t, std::less<>> refusals;
+  int open = 0;
+  {
+    std::lock_guard lock(state_->mutex);
+    s = state_->stats;
+    refusals = state_->limits.refusals();
+    open = state_->limits.open();
+  }
+  for (const auto& [reason, n] : s.refusals) refusals[reason] += n;
+  // Every reason is there from the start (at 0), so that rates over them are defined.
+  for (const char* reason : {"connection limit", "connections per address", "request rate", "token",
+                             "bad request", "spectators per room"}) {
+    refusals.try_emplace(reason, 0);
+  }
+  std::vector<MetricFamily> out;
+  auto family = [&](std::string name, std::string help, MetricType type) -> MetricFamily& {
+    MetricFamily& f = out.emplace_back();
+    f.name = std::move(name);
+    f.help = std::move(help);
+    f.type = type;
+    return f;
+  };
+  auto value = [](std::uint64_t v) { return static_cast<double>(v); };
+  MetricFamily& requests =
+      family("vistel_web_requests_total",
+             "Spectator web server answers by route class and status class", MetricType::kCounter);
+  for (std::size_t r = 0; r < kRouteClasses.size(); ++r) {
+    for (std::size_t c = 0; c < s.answers[r].size(); ++c) {
+      if (s.answers[r][c] == 0) continue;
+      requests.samples.push_back(
+          {{{"route", kRouteClasses[r]}, {"status", fmt::format("{}xx", c + 1)}},
+           value(s.answers[r][c]),
+           {}});
+    }
+  }
+  family("vistel_web_spectators", "WebSockets watching a room now", MetricType::kGauge)
+      .samples.push_back({{}, value(s.spectators_open), {}});
+  family("vistel_web_connections", "Spectator web server connections open (HTTP and WebSocket)",
+         MetricType::kGauge)
+      .samples.push_back({{}, static_cast<double>(open), {}});
+  MetricFamily& bytes = family("vistel_web_sent_bytes_total",
+                               "Bytes sent by the spectator web server", MetricType::kCounter);
+  bytes.samples.push_back({{{"transport", "http"}}, value(s.http_bytes_sent), {}});
+  bytes.samples.push_back({{{"transport", "websocket"}}, value(s.ws_bytes_sent), {}});
+  MetricFamily& refused =
+      family("vistel_web_refused_total",
+             "Spectator web connections, requests and WebSockets refused", MetricType::kCounter);
+  for (const auto& [reason, n] : refusals)
+    refused.samples.push_back({{{"reason", reason}}, value(n), {}});
+  family("vistel_web_timeouts_total", "Web connections closed by a read or write deadline",
+         MetricType::kCounter)
+      .samples.push_back({{}, value(s.timed_out), {}});
+  family("vistel_web_frames_sent_total", "Binary posture frames written to spectators",
+         MetricType::kCounter)
+      .samples.push_back({{}, value(s.frames_sent), {}});
+  family("vistel_web_frames_skipped_total",
+         "Posture frames a slow spectator skipped (a newer one replaced them)",
+         MetricType::kCounter)
+      .samples.push_back({{}, value(s.frames_skipped), {}});
+  return out;
 }
 
 void WebServer::stop() {

@@ -25,13 +25,17 @@
 // stop() closes everything so that io.run() can return; destroy the server after.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "common/base/result.hpp"
 #include "common/scene/seat_layout.hpp"
+#include "server/http/prometheus.hpp"
 #include "server/shell/asio.hpp"
 #include "server/shell/server_shell.hpp"
 #include "server/web/web_config.hpp"
@@ -60,7 +64,21 @@ class WebServer {
     std::uint64_t unauthorized = 0;    // WebSockets refused for their token
     std::uint64_t frames_sent = 0;     // binary frames written to spectators
     std::uint64_t frames_skipped = 0;  // frames a slow spectator skipped
+    // For /metrics (metricFamilies):
+    std::uint64_t spectators_open = 0;  // WebSockets watching a room now
+    std::uint64_t http_bytes_sent = 0;  // HTTP responses, heads included
+    std::uint64_t ws_bytes_sent = 0;    // WebSocket messages (frames as written)
+    // Answers by route class (kRouteClasses) and status class (1xx .. 5xx: index 0 .. 4);
+    // a WebSocket counts its 101 (or its failed handshake) under "websocket".
+    std::array<std::array<std::uint64_t, 5>, 6> answers{};
+    // Refusals counted here: "token" (a WebSocket's join token), "bad request" (an answer
+    // 4xx other than 404 and 429), "spectators per room". metricFamilies() adds WebLimits'
+    // ("connection limit", "connections per address", "request rate").
+    std::map<std::string, std::uint64_t, std::less<>> refusals;
   };
+  // The route classes of Stats::answers, in order (label route="...").
+  static constexpr std::array<const char*, 6> kRouteClasses = {"room_list", "room_page", "asset",
+                                                               "avatar",    "websocket", "other"};
 
   // Binds options.bind_address:options.config.port (0: a free port) and starts
   // accepting. The error names the address and the reason.
@@ -70,6 +88,17 @@ class WebServer {
 
   std::string localAddress() const;  // "ADDRESS:PORT"
   Stats stats() const;
+  // The web side's figures for /metrics (appended after the session server's families):
+  //   vistel_web_requests_total{route,status}  counter: answers by route and status class
+  //   vistel_web_spectators                    gauge: WebSockets watching a room now
+  //   vistel_web_connections                   gauge: HTTP and WebSocket connections open
+  //   vistel_web_sent_bytes_total{transport}   counter: "http" responses, "websocket" messages
+  //   vistel_web_refused_total{reason}         counter: connections, requests and sockets
+  //                                            refused (reasons as in Stats::refusals)
+  //   vistel_web_timeouts_total                counter: closed by a read or write deadline
+  //   vistel_web_frames_sent_total, vistel_web_frames_skipped_total  counters
+  // Thread-safe (takes the server's mutex); cost O(reasons).
+  std::vector<MetricFamily> metricFamilies() const;
   // Stops accepting and closes every connection (spectators get a close "going away").
   void stop();
 

@@ -40,7 +40,8 @@ std::string logOf(const std::string& path) {
   return text ? *text : std::string("(no log)");
 }
 
-// A server with the web side on a free port; web() is its port.
+// A server with the web side on a free port; web() is its port (metrics() that of
+// --metrics-port, when `extra` asks for one).
 class WebServerProcess {
  public:
   WebServerProcess(const std::string& dir, std::vector<std::string> extra)
@@ -53,7 +54,9 @@ class WebServerProcess {
       auto line = program_->readLine(20.0);
       if (!line) break;
       const std::string prefix = "vistel-server web on http://";
+      const std::string metrics = "vistel-server metrics on ";
       if (line->rfind(prefix, 0) == 0) web_ = test::portOf(line->substr(0, line->size() - 1));
+      if (line->rfind(metrics, 0) == 0) metrics_ = test::portOf(*line);
     }
   }
   ~WebServerProcess() {
@@ -61,6 +64,7 @@ class WebServerProcess {
     EXPECT_EQ(program_->wait(10.0).value_or(-999), 0) << log();
   }
   std::uint16_t web() const { return web_; }
+  std::uint16_t metrics() const { return metrics_; }
   std::string log() const { return logOf(log_); }
 
  private:
@@ -68,6 +72,7 @@ class WebServerProcess {
   std::unique_ptr<test::Program> program_;
   std::string address_;
   std::uint16_t web_ = 0;
+  std::uint16_t metrics_ = 0;
 };
 
 std::string sendAndRead(std::uint16_t port, const std::string& bytes, double wait_s = 3.0) {
@@ -116,6 +121,14 @@ std::string stateOf(const std::vector<nlohmann::json>& messages) {
     if (m.value("type", "") == "status") return m.value("state", "");
   }
   return "(none)";
+}
+
+// The value of one sample line of a Prometheus scrape ("name{labels} value"), or -1.
+double metricValue(const std::string& scrape, const std::string& series) {
+  const std::string needle = "\n" + series + " ";
+  const auto at = scrape.find(needle);
+  if (at == std::string::npos) return -1.0;
+  return std::stod(scrape.substr(at + needle.size()));
 }
 
 TEST(WebServerNet, JoinTokensGuardTheRoomSockets) {
@@ -185,7 +198,7 @@ TEST(WebServerNet, HttpLimits) {
   ASSERT_TRUE(writeFileText(config,
                             "[web]\nmax_connections_per_address = 3\nrequest_rate_hz = 1\n"
                             "request_burst = 5\nread_timeout_s = 0.5\nmax_header_bytes = 1024\n"));
-  WebServerProcess server(dir, {"--config", config});
+  WebServerProcess server(dir, {"--config", config, "--metrics-port", "0"});
   ASSERT_NE(server.web(), 0) << server.log();
   const std::uint16_t port = server.web();
 
@@ -222,12 +235,78 @@ TEST(WebServerNet, HttpLimits) {
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   const int fourth = test::connectLoopback(port);
   ASSERT_GE(fourth, 0);
-  timeval timeout{0, 300000};
+  // Closed (a refusal, not the read timeout of an admitted connection: /metrics below tells
+  // them apart; a busy machine may take a while to get to it).
+  timeval timeout{3, 0};
   ::setsockopt(fourth, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
   char byte = 0;
   EXPECT_EQ(::recv(fourth, &byte, 1, 0), 0) << "the fourth connection was not closed";
   ::close(fourth);
   for (int fd : held) ::close(fd);
+
+  // /metrics names each refusal (the fourth connection's too): 431 and 405 (twice) are bad
+  // requests.
+  const std::string scrape = test::httpGet(server.metrics(), "/metrics");
+  EXPECT_GE(metricValue(scrape, R"(vistel_web_refused_total{reason="request rate"})"), 1.0)
+      << scrape;
+  EXPECT_GE(metricValue(scrape, R"(vistel_web_refused_total{reason="connections per address"})"),
+            1.0)
+      << scrape;
+  EXPECT_GE(metricValue(scrape, R"(vistel_web_refused_total{reason="bad request"})"), 3.0)
+      << scrape;
+  EXPECT_GE(metricValue(scrape, "vistel_web_timeouts_total"), 1.0) << scrape;
+}
+
+TEST(WebServerNet, MetricsCountTheWebSide) {
+  const std::string dir = test::scratchDir();
+  WebServerProcess server(dir, {"--metrics-port", "0"});
+  ASSERT_NE(server.web(), 0) << server.log();
+  ASSERT_NE(server.metrics(), 0) << server.log();
+  const std::uint16_t port = server.web();
+
+  std::string before = test::httpGet(server.metrics(), "/metrics");
+  EXPECT_NE(before.find("# TYPE vistel_web_requests_total counter"), std::string::npos) << before;
+  EXPECT_EQ(metricValue(before, "vistel_web_spectators"), 0.0) << before;
+
+  // Three pages, one unknown path, one refused method, one spectator socket.
+  EXPECT_EQ(statusOf(test::httpGet(port, "/")), 200);
+  EXPECT_EQ(statusOf(test::httpGet(port, "/api/rooms")), 200);
+  EXPECT_EQ(statusOf(test::httpGet(port, "/assets/style.css")), 200);
+  EXPECT_EQ(statusOf(test::httpGet(port, "/nope")), 404);
+  EXPECT_EQ(statusOf(sendAndRead(port, "DELETE / HTTP/1.1\r\nHost: x\r\n\r\n")), 405);
+
+  // While a spectator watches, the gauge shows it.
+  asio::io_context io;
+  websocket::stream<asio::ip::tcp::socket> ws(io);
+  ws.next_layer().connect({asio::ip::make_address("127.0.0.1"), port});
+  ws.handshake("127.0.0.1:" + std::to_string(port), "/ws/room/quiet");
+  beast::flat_buffer buffer;
+  ws.read(buffer);  // hello: the server has taken the spectator in
+  std::string during;
+  for (int i = 0; i < 50; ++i) {  // the feed joins on the socket's strand: look a few times
+    during = test::httpGet(server.metrics(), "/metrics");
+    if (metricValue(during, "vistel_web_spectators") == 1.0) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_EQ(metricValue(during, "vistel_web_spectators"), 1.0) << during;
+  ws.close(websocket::close_code::normal);
+
+  const std::string after = test::httpGet(server.metrics(), "/metrics");
+  EXPECT_EQ(metricValue(after, R"(vistel_web_requests_total{route="room_list",status="2xx"})"), 2.0)
+      << after;
+  EXPECT_EQ(metricValue(after, R"(vistel_web_requests_total{route="asset",status="2xx"})"), 1.0)
+      << after;
+  EXPECT_EQ(metricValue(after, R"(vistel_web_requests_total{route="other",status="4xx"})"), 2.0)
+      << after;
+  EXPECT_EQ(metricValue(after, R"(vistel_web_requests_total{route="websocket",status="1xx"})"), 1.0)
+      << after;
+  EXPECT_EQ(metricValue(after, R"(vistel_web_refused_total{reason="bad request"})"), 1.0) << after;
+  EXPECT_GT(metricValue(after, R"(vistel_web_sent_bytes_total{transport="http"})"), 1000.0)
+      << after;
+  EXPECT_GT(metricValue(after, R"(vistel_web_sent_bytes_total{transport="websocket"})"), 10.0)
+      << after;
+  // The session server's own families are still there, first.
+  EXPECT_LT(after.find("vistel_members"), after.find("vistel_web_requests_total")) << after;
 }
 
 }  // namespace
