@@ -85,7 +85,7 @@
 #include "client/net/prop_models.hpp"
 #include "client/net/remote_jitter.hpp"
 #include "client/net/tls_options.hpp"
-#include "client/record/room_recorder.hpp"
+#include "client/record/session_sampling.hpp"
 #include "client/view/room_view.hpp"
 #include "client/voice/voice_engine.hpp"
 #include "client/voice/voice_scene.hpp"
@@ -532,7 +532,8 @@ int main(int argc, char** argv) {
   std::unordered_map<std::string, std::shared_ptr<const AvatarModel>> models;
   models[own_hash] = *own_avatar;
   std::unique_ptr<record::RoomRecorder> recorder;
-  Posture record_own;  // the own posture for the recorder, copied when a sample is due
+  Posture record_own;      // the own posture for the recorder, copied when a sample is due
+  Posture record_scratch;  // a remote member's posture while sampling
   if (!record_room_path.empty()) {
     recorder = std::make_unique<record::RoomRecorder>(
         record::RecorderOptions{.max_extrapolation_s = config->max_extrapolation_s});
@@ -586,7 +587,9 @@ int main(int argc, char** argv) {
           props.emplace_back(p->id, p->ball);
         }
       }
-      if (recorder) recorder->sample(s, elapsed, play_time, record_own);
+      if (recorder) {
+        record::sampleSession(*recorder, s, elapsed, play_time, record_own, record_scratch);
+      }
       return 0;
     });
     if (remote_jitter) {

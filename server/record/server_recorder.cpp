@@ -15,8 +15,8 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "client/record/room_recorder.hpp"
 #include "common/avatar/avatar_io.hpp"
+#include "common/record/room_recorder.hpp"
 #include "common/wire/bit_stream.hpp"
 #include "common/wire/posture_codec.hpp"
 

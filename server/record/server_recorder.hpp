@@ -1,5 +1,5 @@
 // Server-side recording (vistel-server --record-room DIR): what the server saw of each
-// room, written as a skinned glTF animation DIR/<room>-<start>.glb (client/record's
+// room, written as a skinned glTF animation DIR/<room>-<start>.glb (common/record's
 // RoomRecorder and room_glb: one skeleton per member, joint tracks, props as node tracks)
 // when the room empties (its last member left) or the server stops. <start> is the UTC time
 // the recording began, "YYYYMMDDTHHMMSSZ" (a suffix "-2", "-3", ... when that file exists).

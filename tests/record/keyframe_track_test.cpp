@@ -2,7 +2,7 @@
 // (lerp / slerp, as glTF LINEAR plays them), with far fewer keys than samples on smooth
 // motion; constant runs keep two keys; cut() keeps a gap's ends; rotations stay in one
 // hemisphere.
-#include "client/record/keyframe_track.hpp"
+#include "common/record/keyframe_track.hpp"
 
 #include <cmath>
 #include <vector>

@@ -2,7 +2,7 @@
 // joint nodes named as the skeleton's, a shared avatar mesh, members and props as named
 // nodes, moving joints as LINEAR channels and constant ones as static transforms, and a
 // STEP scale channel that hides a member outside its spans.
-#include "client/record/room_glb.hpp"
+#include "common/record/room_glb.hpp"
 
 #include <algorithm>
 #include <string>

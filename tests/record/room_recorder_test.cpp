@@ -1,9 +1,9 @@
-// RoomRecorder over an in-process session (tests/net/sim_network.hpp, fake clock): a viewer
-// records two members sending the synthetic wave, itself at rest, and a member who joins at
-// 1 s and drops at 2 s. Spans follow who was shown, moving joints have keys within the
-// tolerance of what the viewer's jitter buffer showed, constant ones collapse, and the
-// export holds every member.
-#include "client/record/room_recorder.hpp"
+// RoomRecorder fed by a client's session (client/record sampleSession) over an in-process session
+// (tests/net/sim_network.hpp, fake clock): a viewer records two members sending the synthetic wave,
+// itself at rest, and a member who joins at 1 s and drops at 2 s. Spans follow who was shown,
+// moving joints have keys within the tolerance of what the viewer's jitter buffer showed, constant
+// ones collapse, and the export holds every member.
+#include "common/record/room_recorder.hpp"
 
 #include <algorithm>
 #include <array>
@@ -11,7 +11,8 @@
 #include <gtest/gtest.h>
 #include <spdlog/spdlog.h>
 
-#include "client/record/room_glb.hpp"
+#include "client/record/session_sampling.hpp"
+#include "common/record/room_glb.hpp"
 #include "tests/net/sim_network.hpp"
 #include "tests/net/synthetic_avatar.hpp"
 
@@ -40,7 +41,7 @@ TEST(RoomRecorder, RecordsWhoWasShownAndHowTheyMoved) {
   const Posture own = restPosture(test::makeSyntheticAvatar().skeleton);
   const double t0 = net.now();
   double next_send = net.now(), next_frame = net.now();
-  Posture shown;
+  Posture shown, scratch;
   std::vector<std::pair<double, glm::quat>> wave_head;  // (recording time, shown rotation)
   net.advance(3.0, 0.001, [&](double now) {
     if (now >= t0 + 1.0 && !net.client(late).connected && now < t0 + 2.0) net.connect(late);
@@ -58,7 +59,7 @@ TEST(RoomRecorder, RecordsWhoWasShownAndHowTheyMoved) {
       const double local = net.localTime(viewer);
       const double play = s.serverTime(local) - 0.1;
       const bool due = recorder.due(local);
-      recorder.sample(s, local, play, own);
+      sampleSession(recorder, s, local, play, own, scratch);
       const net::RemoteMember* m = s.findMember(net.session(wave).memberId());
       if (due && m != nullptr &&
           m->buffer.sampleShown(play, 0.1, shown) != net::JitterBuffer::Shown::kNone) {

@@ -8,7 +8,7 @@
 #include <memory>
 
 #include "client/net/prop_models.hpp"
-#include "client/record/room_recorder.hpp"
+#include "common/record/room_recorder.hpp"
 #include "tests/net/synthetic_avatar.hpp"
 
 namespace vistel::test {

@@ -20,8 +20,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "client/record/room_glb.hpp"
 #include "common/base/file.hpp"
+#include "common/record/room_glb.hpp"
 #include "tests/integration/program.hpp"
 #include "tests/integration/session_scratch.hpp"
 #include "tests/record/glb_reader.hpp"

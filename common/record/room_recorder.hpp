@@ -1,10 +1,10 @@
-// What a client showed of its room, recorded for export as a skinned glTF animation
-// (vistel-client --record-room FILE.glb; room_glb.hpp writes it).
+// What a room showed, recorded for export as a skinned glTF animation (room_glb.hpp writes
+// it): by a client of what it drew (vistel-client --record-room FILE.glb, client/record's
+// sampleSession) or by the server of what spectators see (vistel-server --record-room DIR,
+// server/record).
 //
-// Every sample (at the room's tick rate by default) takes, for each roster member, the
-// posture the client shows: a remote member's from its jitter buffer at the playback time
-// (as the frame loop samples it, extrapolation limit included), the own avatar's latest
-// posture (drawn ahead of the others, as on screen); and each prop's centre. Tracks per
+// Every sample (at the room's tick rate by default) takes, for each member shown, its seat
+// and posture, and each prop's centre (beginSample, addMember, addProp, endSample). Tracks per
 // member (keyed by name and avatar hash, so a member who reconnects continues its tracks):
 // the seat (translation and yaw), the root translation, every joint's local rotation (and
 // local translations when the postures carry them), each reduced online to keyframes
@@ -26,18 +26,18 @@
 #include <utility>
 #include <vector>
 
-#include "client/net/client_session.hpp"
-#include "client/net/prop_models.hpp"
-#include "client/record/keyframe_track.hpp"
 #include "common/anim/posture.hpp"
 #include "common/avatar/avatar_model.hpp"
 #include "common/base/result.hpp"
+#include "common/deform/prop.hpp"
+#include "common/record/keyframe_track.hpp"
+#include "common/scene/seat_layout.hpp"
 
 namespace vistel::record {
 
 struct RecorderOptions {
   double rate_hz = 0.0;                         // samples per second; 0: the room's tick rate
-  double max_extrapolation_s = 0.1;             // as the frame loop's ([playback])
+  double max_extrapolation_s = 0.1;             // a client's, as its frame loop's ([playback])
   float rotation_tolerance_rad = 0.004363323f;  // 0.25 degree per joint
   float translation_tolerance_m = 0.0005f;      // 0.5 mm (root, seat, props)
 };
@@ -95,24 +95,18 @@ class RoomRecorder {
  public:
   explicit RoomRecorder(RecorderOptions options = {});
 
-  // Called every frame with the session locked: when a sample is due at `now` (the
-  // caller's clock, seconds), records every member and prop as shown at `play_time`
-  // (server clock); `own` is the own avatar's posture (used for the member marked self).
-  // Allocation-free once every track exists, but for keys and window growth.
-  void sample(const net::ClientSession& session, double now, double play_time, const Posture& own);
-
-  // sample() in parts, for callers that hold no ClientSession (the server's recorder,
-  // server/record): beginSample() when a sample is due at `now` (rate_hz: the room's rate,
-  // used when options.rate_hz is 0), then addMember() / addProp() for everything shown at
-  // that moment, then endSample(). beginSample() returns false when no sample is due (call
-  // neither of the others then). A member is keyed by name and avatar hash as in sample().
+  // One sample: beginSample() when a sample is due at `now` (the caller's clock, seconds;
+  // rate_hz: the room's rate, used when options.rate_hz is 0), then addMember() / addProp()
+  // for everything shown at that moment, then endSample(). beginSample() returns false when
+  // no sample is due (call neither of the others then). A member is keyed by name and
+  // avatar hash. Allocation-free once every track exists, but for keys and window growth.
   bool beginSample(double now, double rate_hz);
-  void addMember(const std::string& name, const std::string& avatar_hash, const net::Seat& seat,
+  void addMember(const std::string& name, const std::string& avatar_hash, const SeatPlacement& seat,
                  const Posture& posture);
   void addProp(std::uint32_t id, const BallSpec& ball, const glm::vec3& position);
   void endSample();
 
-  // True when sample() would record at `now` (to skip copying the own posture otherwise).
+  // True when beginSample() would record at `now` (to skip copying postures otherwise).
   bool due(double now) const { return now >= next_due_ - 0.25 * interval_; }
 
   // Closes open spans at the last sample and flushes every track's window. Idempotent.
@@ -125,11 +119,12 @@ class RoomRecorder {
       const std::function<std::shared_ptr<const AvatarModel>(const std::string&)>& avatar_of);
 
   const RoomRecording& recording() const { return recording_; }
+  const RecorderOptions& options() const { return options_; }
 
  private:
   RecordedMember& memberFor(const std::string& name, const std::string& avatar_hash);
   RecordedProp& propFor(std::uint32_t id, const BallSpec& ball);
-  void addPosture(RecordedMember& rec, const net::Seat& seat, const Posture& posture, double t);
+  void addPosture(RecordedMember& rec, const SeatPlacement& seat, const Posture& posture, double t);
 
   RecorderOptions options_;
   RoomRecording recording_;
@@ -144,8 +139,6 @@ class RoomRecorder {
   double interval_ = 0.0;    // seconds between samples (0: none taken yet)
   double sample_now_ = 0.0;  // the sample in progress (beginSample): caller's time ...
   double sample_t_ = 0.0;    // ... and recording time (0 until the recording starts)
-  Posture scratch_;
-  net::PropModels prop_models_;
 };
 
 }  // namespace vistel::record

@@ -27,8 +27,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "client/record/room_recorder.hpp"
 #include "common/base/result.hpp"
+#include "common/record/room_recorder.hpp"
 
 namespace vistel::record {
 

@@ -1,4 +1,4 @@
-#include "client/record/keyframe_track.hpp"
+#include "common/record/keyframe_track.hpp"
 
 #include <algorithm>
 #include <cmath>

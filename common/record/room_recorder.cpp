@@ -1,4 +1,4 @@
-#include "client/record/room_recorder.hpp"
+#include "common/record/room_recorder.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,8 +8,9 @@
 #include <fmt/format.h>
 #include <glm/gtc/quaternion.hpp>
 
-#include "client/record/room_glb.hpp"
 #include "common/base/file.hpp"
+#include "common/record/room_glb.hpp"
+#include "common/scene/deform_scene.hpp"
 
 namespace vistel::record {
 namespace {
@@ -82,8 +83,8 @@ RecordedProp& RoomRecorder::propFor(std::uint32_t id, const BallSpec& ball) {
   return recording_.props.back();
 }
 
-void RoomRecorder::addPosture(RecordedMember& rec, const net::Seat& seat, const Posture& posture,
-                              double t) {
+void RoomRecorder::addPosture(RecordedMember& rec, const SeatPlacement& seat,
+                              const Posture& posture, double t) {
   const std::size_t nj = posture.rotations.size();
   // The joint count is fixed by the first posture (the avatar's); others are not shown.
   if (rec.rotations.empty()) {
@@ -102,29 +103,6 @@ void RoomRecorder::addPosture(RecordedMember& rec, const net::Seat& seat, const 
   if (!rec.translations.empty() && posture.translations.size() == nj) {
     for (std::size_t j = 1; j < nj; ++j) rec.translations[j].add(t, posture.translations[j]);
   }
-}
-
-void RoomRecorder::sample(const net::ClientSession& session, double now, double play_time,
-                          const Posture& own) {
-  if (!beginSample(now, session.tickRateHz())) return;
-  // Members: the posture each shows now (remote: the jitter buffer at the playback time).
-  for (const auto& member : session.members()) {
-    const net::RemoteMember& m = *member;
-    const Posture* posture = nullptr;
-    if (m.is_self) {
-      posture = own.rotations.empty() ? nullptr : &own;
-    } else if (m.buffer.sampleShown(play_time, options_.max_extrapolation_s, scratch_) !=
-               net::JitterBuffer::Shown::kNone) {
-      posture = &scratch_;
-    }
-    if (posture != nullptr) addMember(m.name, m.avatar_hash, m.seat, *posture);
-  }
-  // Props: their centres at the playback time.
-  for (const auto& prop : session.props()) {
-    net::PropSample state;
-    if (prop->track.sample(play_time, state)) addProp(prop->id, prop->ball, state.position);
-  }
-  endSample();
 }
 
 bool RoomRecorder::beginSample(double now, double rate_hz) {
@@ -146,7 +124,7 @@ bool RoomRecorder::beginSample(double now, double rate_hz) {
 }
 
 void RoomRecorder::addMember(const std::string& name, const std::string& avatar_hash,
-                             const net::Seat& seat, const Posture& posture) {
+                             const SeatPlacement& seat, const Posture& posture) {
   if (posture.rotations.empty()) return;
   if (start_ < 0.0) start_ = sample_now_;
   RecordedMember& rec = memberFor(name, avatar_hash);
@@ -210,7 +188,9 @@ Result<RecordingSummary> RoomRecorder::write(
     if (!rec.avatar && avatar_of) rec.avatar = avatar_of(rec.avatar_hash);
   }
   for (RecordedProp& rec : recording_.props) {
-    if (!rec.model) rec.model = prop_models_.ball(rec.ball);
+    if (rec.model) continue;
+    auto made = makeBallAvatar(rec.ball);  // null: the prop is left out, with a warning
+    if (made) rec.model = std::move(*made);
   }
   RecordingSummary summary;
   Result<std::vector<std::uint8_t>> bytes = encodeRoomGlb(recording_, &summary);

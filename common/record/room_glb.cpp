@@ -1,4 +1,4 @@
-#include "client/record/room_glb.hpp"
+#include "common/record/room_glb.hpp"
 
 #include <algorithm>
 #include <cmath>
