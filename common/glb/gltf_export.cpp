@@ -166,51 +166,6 @@ void appendMatrix(const glm::mat4& m, std::vector<float>& out) {
   }
 }
 
-// Materials, and the textures and images they use (each image's bytes as a buffer view).
-// Without texture coordinates, textures are left out (a textured primitive needs
-// TEXCOORD_0).
-Status addLook(const AvatarLook& look, GlbBuilder& b, json& materials, json& textures,
-               json& images) {
-  const bool with_uvs = !look.uvs.empty();
-  std::vector<int> texture_of(look.textures.size(), -1);
-  auto textureIndex = [&](int t) {
-    auto& slot = texture_of[static_cast<std::size_t>(t)];
-    if (slot >= 0) return slot;
-    const AvatarTexture& tex = look.textures[static_cast<std::size_t>(t)];
-    const int view = b.addView(tex.encoded.data(), tex.encoded.size(), 0);
-    json image = {{"bufferView", view}, {"mimeType", tex.mime}};
-    if (!tex.name.empty()) image["name"] = tex.name;
-    images.push_back(std::move(image));
-    textures.push_back({{"sampler", 0}, {"source", images.size() - 1}});
-    slot = static_cast<int>(textures.size()) - 1;
-    return slot;
-  };
-  for (const AvatarMaterial& m : look.materials) {
-    json pbr = {
-        {"baseColorFactor", {m.base_color.r, m.base_color.g, m.base_color.b, m.base_color.a}},
-        {"metallicFactor", m.metallic},
-        {"roughnessFactor", m.roughness}};
-    json mat = json::object();
-    if (!m.name.empty()) mat["name"] = m.name;
-    if (with_uvs && m.base_color_texture >= 0) {
-      pbr["baseColorTexture"] = {{"index", textureIndex(m.base_color_texture)}};
-    }
-    mat["pbrMetallicRoughness"] = std::move(pbr);
-    if (with_uvs && m.normal_texture >= 0) {
-      mat["normalTexture"] = {{"index", textureIndex(m.normal_texture)}, {"scale", m.normal_scale}};
-    }
-    if (m.alpha_mode == AlphaMode::kMask) {
-      mat["alphaMode"] = "MASK";
-      mat["alphaCutoff"] = m.alpha_cutoff;
-    } else if (m.alpha_mode == AlphaMode::kBlend) {
-      mat["alphaMode"] = "BLEND";
-    }
-    if (m.double_sided) mat["doubleSided"] = true;
-    materials.push_back(std::move(mat));
-  }
-  return {};
-}
-
 }  // namespace
 
 Result<std::vector<std::uint8_t>> encodeGlb(const GltfScene& scene) {
@@ -360,7 +315,7 @@ Result<std::vector<std::uint8_t>> encodeGlb(const GltfScene& scene) {
   json materials = json::array();
   json textures = json::array();
   json images = json::array();
-  if (Status s = addLook(scene.look, b, materials, textures, images); !s) return s.error();
+  appendLook(scene.look, b, materials, textures, images);
 
   // The document.
   nodes.insert(nodes.begin(), mesh_node);
@@ -381,9 +336,7 @@ Result<std::vector<std::uint8_t>> encodeGlb(const GltfScene& scene) {
   if (!textures.empty()) {
     doc["textures"] = textures;
     doc["images"] = images;
-    // Linear magnification, trilinear minification, repeat (glTF's defaults, said).
-    doc["samplers"] = json::array(
-        {{{"magFilter", 9729}, {"minFilter", 9987}, {"wrapS", 10497}, {"wrapT", 10497}}});
+    doc["samplers"] = lookSamplers();
   }
   if (!animations.empty()) doc["animations"] = animations;
   return assembleGlb(doc.dump(), b.bin());
@@ -449,6 +402,55 @@ void keepLargestInfluences(GltfSkin& skin, int k) {
   skin.influences = k;
   skin.joints = std::move(joints);
   skin.weights = std::move(weights);
+}
+
+int appendLook(const AvatarLook& look, GlbBuilder& b, json& materials, json& textures,
+               json& images) {
+  const int first_material = static_cast<int>(materials.size());
+  const bool with_uvs = !look.uvs.empty();
+  std::vector<int> texture_of(look.textures.size(), -1);
+  auto textureIndex = [&](int t) {
+    auto& slot = texture_of[static_cast<std::size_t>(t)];
+    if (slot >= 0) return slot;
+    const AvatarTexture& tex = look.textures[static_cast<std::size_t>(t)];
+    const int view = b.addView(tex.encoded.data(), tex.encoded.size(), 0);
+    json image = {{"bufferView", view}, {"mimeType", tex.mime}};
+    if (!tex.name.empty()) image["name"] = tex.name;
+    images.push_back(std::move(image));
+    textures.push_back({{"sampler", 0}, {"source", images.size() - 1}});
+    slot = static_cast<int>(textures.size()) - 1;
+    return slot;
+  };
+  for (const AvatarMaterial& m : look.materials) {
+    json pbr = {
+        {"baseColorFactor", {m.base_color.r, m.base_color.g, m.base_color.b, m.base_color.a}},
+        {"metallicFactor", m.metallic},
+        {"roughnessFactor", m.roughness}};
+    json mat = json::object();
+    if (!m.name.empty()) mat["name"] = m.name;
+    if (with_uvs && m.base_color_texture >= 0) {
+      pbr["baseColorTexture"] = {{"index", textureIndex(m.base_color_texture)}};
+    }
+    mat["pbrMetallicRoughness"] = std::move(pbr);
+    if (with_uvs && m.normal_texture >= 0) {
+      mat["normalTexture"] = {{"index", textureIndex(m.normal_texture)}, {"scale", m.normal_scale}};
+    }
+    if (m.alpha_mode == AlphaMode::kMask) {
+      mat["alphaMode"] = "MASK";
+      mat["alphaCutoff"] = m.alpha_cutoff;
+    } else if (m.alpha_mode == AlphaMode::kBlend) {
+      mat["alphaMode"] = "BLEND";
+    }
+    if (m.double_sided) mat["doubleSided"] = true;
+    materials.push_back(std::move(mat));
+  }
+  return first_material;
+}
+
+nlohmann::json lookSamplers() {
+  // Linear magnification, trilinear minification, repeat (glTF's defaults, said).
+  return json::array(
+      {{{"magFilter", 9729}, {"minFilter", 9987}, {"wrapS", 10497}, {"wrapT", 10497}}});
 }
 
 }  // namespace vistel

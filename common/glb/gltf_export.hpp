@@ -23,6 +23,7 @@
 
 #include "common/avatar/avatar_model.hpp"
 #include "common/base/result.hpp"
+#include "common/glb/glb_builder.hpp"
 
 namespace vistel {
 
@@ -89,6 +90,17 @@ GltfScene posedAvatarScene(const AvatarModel& avatar, std::span<const glm::mat4>
 
 // The avatar in its rest posture (its prototype skin and rest skeleton).
 GltfScene restAvatarScene(const AvatarModel& avatar);
+
+// Appends a look to a document being built with `b`: its materials, and the textures and
+// images they use (each image's bytes a buffer view of b; every texture uses sampler 0, see
+// lookSamplers). Returns the index in `materials` of the look's first material: a submesh
+// with material m uses first + m. Without texture coordinates the materials are written
+// without textures (a textured primitive needs TEXCOORD_0).
+int appendLook(const AvatarLook& look, GlbBuilder& b, nlohmann::json& materials,
+               nlohmann::json& textures, nlohmann::json& images);
+
+// The one sampler appendLook's textures use (the document's "samplers").
+nlohmann::json lookSamplers();
 
 // Keeps each vertex's `k` largest influences (1..4), renormalised, for viewers that read
 // JOINTS_0/WEIGHTS_0 alone (three.js). A skin with k or fewer is left as it is.

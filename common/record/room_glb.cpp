@@ -12,6 +12,7 @@
 
 #include "common/glb/glb_builder.hpp"
 #include "common/glb/glb_container.hpp"
+#include "common/glb/gltf_export.hpp"
 #include "common/math/transform.hpp"
 
 namespace vistel::record {
@@ -148,17 +149,37 @@ class RoomDocument {
     attributes["POSITION"] = bin_.addFloats(positions, 3, "VEC3", kGltfArrayBuffer, true);
     attributes["NORMAL"] = bin_.addFloats(normals, 3, "VEC3", kGltfArrayBuffer, false);
     if (skinned) addSkinAttributes(avatar, attributes);
-    json primitive = {{"attributes", attributes}, {"mode", 4}};
-    if (nvert < 65535) {
-      std::vector<std::uint16_t> indices(skin.indices.begin(), skin.indices.end());
-      primitive["indices"] =
-          bin_.addIntegers(indices, kGltfUnsignedShort, "SCALAR", 1, kGltfElementArrayBuffer);
-    } else {
-      primitive["indices"] =
-          bin_.addIntegers(skin.indices, kGltfUnsignedInt, "SCALAR", 1, kGltfElementArrayBuffer);
+    // The avatar's look: texture coordinates, and one primitive per submesh with its
+    // material (the look's materials appended to the document's).
+    const AvatarLook& look = avatar.look;
+    const bool with_look = !look.materials.empty() || look.uvs.size() == nvert;
+    int first_material = 0;
+    if (with_look) {
+      if (look.uvs.size() == nvert) {
+        attributes["TEXCOORD_0"] = bin_.addFloats(
+            std::span<const float>(reinterpret_cast<const float*>(look.uvs.data()), nvert * 2), 2,
+            "VEC2", kGltfArrayBuffer, false);
+      }
+      first_material = appendLook(look, bin_, materials_, textures_, images_);
+    }
+    json primitives = json::array();
+    for (const AvatarSubmesh& sm : effectiveSubmeshes(look, skin.indices.size())) {
+      json primitive = {{"attributes", attributes}, {"mode", 4}};
+      const auto part =
+          std::span<const std::uint32_t>(skin.indices).subspan(sm.first_index, sm.index_count);
+      if (nvert < 65535) {
+        std::vector<std::uint16_t> indices(part.begin(), part.end());
+        primitive["indices"] =
+            bin_.addIntegers(indices, kGltfUnsignedShort, "SCALAR", 1, kGltfElementArrayBuffer);
+      } else {
+        primitive["indices"] =
+            bin_.addIntegers(part, kGltfUnsignedInt, "SCALAR", 1, kGltfElementArrayBuffer);
+      }
+      if (with_look && sm.material >= 0) primitive["material"] = first_material + sm.material;
+      primitives.push_back(std::move(primitive));
     }
     meshes_.push_back({{"name", avatar.name.empty() ? std::string("avatar") : avatar.name},
-                       {"primitives", json::array({primitive})}});
+                       {"primitives", std::move(primitives)}});
     const int index = static_cast<int>(meshes_.size()) - 1;
     meshes_by_model_.emplace(key, index);
     return index;
@@ -192,6 +213,12 @@ class RoomDocument {
                 {"scenes", json::array({{{"name", "room"}, {"nodes", roots_}}})},
                 {"nodes", nodes_}};
     if (!meshes_.empty()) doc["meshes"] = meshes_;
+    if (!materials_.empty()) doc["materials"] = materials_;
+    if (!textures_.empty()) {
+      doc["textures"] = textures_;
+      doc["images"] = images_;
+      doc["samplers"] = lookSamplers();
+    }
     if (!skins_.empty()) doc["skins"] = skins_;
     if (!channels_.empty()) {
       doc["animations"] =
@@ -273,6 +300,9 @@ class RoomDocument {
   json nodes_ = json::array();
   json roots_ = json::array();
   json meshes_ = json::array();
+  json materials_ = json::array();  // every avatar's look, appended (appendLook)
+  json textures_ = json::array();
+  json images_ = json::array();
   json skins_ = json::array();
   json samplers_ = json::array();
   json channels_ = json::array();
