@@ -2,12 +2,14 @@
 // $VISTEL_SHARED_DATA), the clip's own skeleton wears the simulated four trackers (default
 // FASTRAK-like noise, 4 ms latency, 120 Hz shared by the stations; a noiseless run for
 // reference; and the earlier pipeline, One-Euro stations without the trunk prior, with noise
-// for comparison); the solver runs through the calibration hold, calibrates on it and solves
-// every tick, and the
+// for comparison), and six (`/sensors:6`: a tracker on each foot too, 240 Hz shared, 40 Hz per
+// station; with and without noise); the solver runs through the calibration
+// hold, calibrates on it and solves every tick, and the
 // solved motion is scored against the clip at the clip's frames:
 //   mpjpe_upper_cm  mean joint position error over spine, neck, head, shoulders, elbows,
 //                   wrists (target <= 2 cm with default noise on the gesture clips)
-//   mpjpe_all_cm    ... over every joint (legs come from a standing heuristic)
+//   mpjpe_all_cm    ... over every joint (legs come from a standing heuristic, or from the
+//                   foot trackers with six sensors); mpjpe_legs_cm over thighs, shins, feet, toes
 //   mpjre_deg       mean joint rotation error (model space), all joints; mpjre_upper_deg
 //   jerk_solved, jerk_clip   mean |jerk| of all joints, m/s^3 (jitter); jitter_ratio their
 //                   ratio (issue 21's target: <= 1.5 with default noise, <= 1.1 without);
@@ -52,7 +54,8 @@ std::map<std::string, std::unique_ptr<ClipBody>>& bodies() {
   return cache;
 }
 
-void benchClip(benchmark::State& state, const std::string& path, bool noise, bool one_euro) {
+void benchClip(benchmark::State& state, const std::string& path, bool noise, bool one_euro,
+               bool feet) {
   auto& cache = bodies();
   if (!cache.count(path)) {
     Result<ClipBody> body = loadClipBody(path);
@@ -67,6 +70,12 @@ void benchClip(benchmark::State& state, const std::string& path, bool noise, boo
   if (!noise) {
     options.sim.position_noise_m = 0.0f;
     options.sim.orientation_noise_deg = 0.0f;
+  }
+  if (feet) {
+    // Six stations (a tracker on each foot) sharing 240 Hz: 40 Hz each (the four get 30 Hz);
+    // a multiple of the clips' frame rates, so the solved frames do not alias.
+    options.sim.foot_trackers = true;
+    options.sim.rate_hz = 240.0;
   }
   if (one_euro) {
     // The earlier pipeline, for comparison: One-Euro stations, no trunk prior.
@@ -116,6 +125,7 @@ void benchClip(benchmark::State& state, const std::string& path, bool noise, boo
   state.SetItemsProcessed(state.iterations());
   state.counters["mpjpe_upper_cm"] = m.mpjpe_upper_m * 100.0;
   state.counters["mpjpe_all_cm"] = m.mpjpe_all_m * 100.0;
+  state.counters["mpjpe_legs_cm"] = m.mpjpe_legs_m * 100.0;
   state.counters["max_upper_cm"] = m.max_upper_m * 100.0;
   state.counters["mpjre_deg"] = m.mpjre_all_deg;
   state.counters["mpjre_upper_deg"] = m.mpjre_upper_deg;
@@ -156,16 +166,17 @@ int main(int argc, char** argv) {
   for (const fs::path& clip : clips) {
     const std::string name = clip.parent_path().filename().string() + "/" + clip.stem().string();
     // The default station filter (Kalman) with and without noise; the One-Euro filter with
-    // noise for comparison.
-    for (int variant = 0; variant < 3; ++variant) {
-      const bool noise = variant != 1;
+    // noise for comparison; six sensors (foot trackers) with and without noise.
+    for (int variant = 0; variant < 5; ++variant) {
+      const bool noise = variant != 1 && variant != 4;
       const bool one_euro = variant == 2;
+      const bool feet = variant >= 3;
       benchmark::RegisterBenchmark(
-          fmt::format("posture/{}/noise:{}{}", name, noise ? "default" : "none",
-                      one_euro ? "/filter:one_euro" : "")
+          fmt::format("posture/{}/noise:{}{}{}", name, noise ? "default" : "none",
+                      one_euro ? "/filter:one_euro" : "", feet ? "/sensors:6" : "")
               .c_str(),
-          [path = clip.string(), noise, one_euro](benchmark::State& state) {
-            vistel::benchClip(state, path, noise, one_euro);
+          [path = clip.string(), noise, one_euro, feet](benchmark::State& state) {
+            vistel::benchClip(state, path, noise, one_euro, feet);
           })
           ->Unit(benchmark::kMicrosecond);
     }

@@ -39,6 +39,12 @@ void BodyCalibration::toModel(BodySite site, const glm::vec3& position,
     case BodySite::kRightWrist:
       p = chest_scaled + (position - chest_position) / proportions.arm[1];
       break;
+    case BodySite::kLeftFoot:
+    case BodySite::kRightFoot:
+      // Scaled about the chest by the height ratio: vertically the same as the chest's
+      // scaling about the floor.
+      p = chest_scaled + (position - chest_position) / proportions.height;
+      break;
   }
   out_position = align_rotation * p + align_translation;
   out_orientation = align_rotation * orientation;
@@ -72,6 +78,8 @@ Result<BodyCalibration> calibrateBody(const Skeleton& skeleton, const JointRoles
       ++n;
     }
     if (n == 0) {
+      // A foot station that never reported is not worn (four sensors); the others are needed.
+      if (isFootSite(static_cast<BodySite>(s))) continue;
       return fail("calibration: no reading from the {} station in the calibration window",
                   bodySiteName(static_cast<BodySite>(s)));
     }
@@ -102,6 +110,7 @@ Result<BodyCalibration> calibrateBody(const Skeleton& skeleton, const JointRoles
   const auto nominal = attachSensors(roles, model, options.nominal_mounts);
   std::array<glm::vec3, kBodySiteCount> predicted{};
   for (int s = 0; s < kBodySiteCount; ++s) {
+    if (nominal[s].segment < 0) continue;
     glm::quat unused;
     sensorPose(nominal[s], model, predicted[s], unused);
   }
@@ -140,7 +149,7 @@ Result<BodyCalibration> calibrateBody(const Skeleton& skeleton, const JointRoles
   // Alignment.
   if (options.alignment == AlignmentMode::kFacing) {
     std::array<glm::vec3, kBodySiteCount> scaled{};
-    for (int s = 0; s < kBodySiteCount; ++s) {
+    for (int s = 0; s < kUpperBodySiteCount; ++s) {
       glm::quat unused;
       BodyCalibration identity = cal;
       identity.align_rotation = glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
@@ -168,6 +177,8 @@ Result<BodyCalibration> calibrateBody(const Skeleton& skeleton, const JointRoles
     const BodySite site = static_cast<BodySite>(s);
     StationCalibration& sc = cal.stations[s];
     sc.segment = mountSegment(roles, site);
+    // Not worn (a foot station that never reported) or nothing to ride on (no foot joint).
+    if (!ref[s].valid || sc.segment < 0) continue;
     const glm::mat4& m = model[static_cast<std::size_t>(sc.segment)];
     const glm::quat w_seg = worldRotation(m);
     glm::vec3 p_model;

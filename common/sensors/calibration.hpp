@@ -72,8 +72,11 @@ struct BodyCalibration {
 };
 
 // Averages the valid readings of `frames` (stations and gloves) and calibrates against the
-// calibration posture. Fails, naming the station, when a station never reported in the
-// window (the solver cannot place that segment), or when no frame is given.
+// calibration posture. Fails, naming the station, when one of the four upper-body stations
+// never reported in the window (the solver cannot place that segment), or when no frame is
+// given. A foot station that never reported is not worn: its StationCalibration stays
+// uncalibrated (as does one whose skeleton has no foot joint) and the solver infers that
+// leg.
 Result<BodyCalibration> calibrateBody(const Skeleton& skeleton, const JointRoles& roles,
                                       const Posture& calibration_posture,
                                       std::span<const SensorFrame> frames,

@@ -112,6 +112,16 @@ std::vector<int> upperBodyJoints(const JointRoles& roles) {
   return out;
 }
 
+std::vector<int> legJoints(const JointRoles& roles) {
+  std::vector<int> out;
+  for (int side = 0; side < 2; ++side) {
+    for (Role r : {thighRole(side), shinRole(side), footRole(side), toesRole(side)}) {
+      if (roles.has(r)) out.push_back(roles[r]);
+    }
+  }
+  return out;
+}
+
 PostureMetrics measurePostures(const Skeleton& skeleton, const JointRoles& roles,
                                std::span<const Posture> truth, std::span<const Posture> solved,
                                double frame_time) {
@@ -122,7 +132,8 @@ PostureMetrics measurePostures(const Skeleton& skeleton, const JointRoles& roles
   const Posed a = pose(skeleton, truth.first(frames));
   const Posed b = pose(skeleton, solved.first(frames));
   const std::vector<int> upper = upperBodyJoints(roles);
-  double pos_all = 0.0, pos_up = 0.0, rot_all = 0.0, rot_up = 0.0;
+  const std::vector<int> legs = legJoints(roles);
+  double pos_all = 0.0, pos_up = 0.0, rot_all = 0.0, rot_up = 0.0, pos_legs = 0.0;
   for (std::size_t f = 0; f < frames; ++f) {
     for (std::size_t j = 0; j < n; ++j) {
       pos_all += glm::distance(a.position[f * n + j], b.position[f * n + j]);
@@ -136,6 +147,10 @@ PostureMetrics measurePostures(const Skeleton& skeleton, const JointRoles& roles
       m.max_upper_m = std::max(m.max_upper_m, e);
       rot_up += glm::length(rotationVector(glm::inverse(a.rotation[k]) * b.rotation[k]));
     }
+    for (int j : legs) {
+      const std::size_t k = f * n + static_cast<std::size_t>(j);
+      pos_legs += glm::distance(a.position[k], b.position[k]);
+    }
   }
   m.frames = static_cast<int>(frames);
   m.mpjpe_all_m = pos_all / static_cast<double>(frames * n);
@@ -144,6 +159,7 @@ PostureMetrics measurePostures(const Skeleton& skeleton, const JointRoles& roles
     m.mpjpe_upper_m = pos_up / static_cast<double>(frames * upper.size());
     m.mpjre_upper_deg = glm::degrees(rot_up / static_cast<double>(frames * upper.size()));
   }
+  if (!legs.empty()) m.mpjpe_legs_m = pos_legs / static_cast<double>(frames * legs.size());
   m.jerk_truth = meanJerk(a.position, frames, n, frame_time);
   m.jerk_solved = meanJerk(b.position, frames, n, frame_time);
   m.jerk_upper_truth = meanJerk(a.position, frames, n, frame_time, upper);

@@ -18,6 +18,7 @@ struct PostureMetrics {
   int frames = 0;
   double mpjpe_upper_m = 0.0;  // spine joints, neck, head, shoulders, elbows, wrists
   double mpjpe_all_m = 0.0;    // every joint of the skeleton
+  double mpjpe_legs_m = 0.0;   // thighs (hips), shins (knees), feet (ankles), toes
   double mpjre_upper_deg = 0.0;
   double mpjre_all_deg = 0.0;
   double max_upper_m = 0.0;  // worst single upper-body joint error
@@ -37,6 +38,9 @@ struct PostureMetrics {
     return max_jump_truth_m > 0.0 ? max_jump_solved_m / max_jump_truth_m : 0.0;
   }
 };
+
+// The leg joints by role: thighs, shins, feet, toes — those the skeleton has.
+std::vector<int> legJoints(const JointRoles& roles);
 
 // The upper-body joints by role: spine, chest, upper_chest, neck, head, upper arms (the
 // shoulder joints), forearms (elbows), hands (wrists) — those the skeleton has.

@@ -91,6 +91,10 @@ Result<PostureSolver> PostureSolver::create(const Skeleton& skeleton, const Join
       !(options.blend_back_s > 0.0) || !(options.stale_after_s > 0.0)) {
     return fail("posture solver: time constants must be positive");
   }
+  if (!(options.max_knee_swivel_deg_s > 0.0f)) {
+    return fail("posture solver: max_knee_swivel_deg_s {} must be positive",
+                options.max_knee_swivel_deg_s);
+  }
 
   PostureSolver s;
   s.skeleton_ = skeleton;
@@ -280,6 +284,37 @@ Result<PostureSolver> PostureSolver::create(const Skeleton& skeleton, const Join
     leg.frame_c_inv = glm::inverse(frameQuat(d1, left));
     leg.shin_frame_c_inv = glm::inverse(frameQuat(d2, left));
     leg.foot_from_hips_c = pf - s.pos_c_[static_cast<std::size_t>(s.hips_)];
+    // With a foot station: the knee's side of the hip-ankle line, kept in the foot's frame
+    // (the knee points where the foot points): from the calibration knee when it is bent
+    // enough to say, else forward (and a little up, as the heuristic's).
+    const glm::vec3 axis = glm::normalize(pf - pt);
+    const glm::vec3 perp = (pk - pt) - axis * glm::dot(pk - pt, axis);
+    const glm::vec3 pole = glm::length(perp) > 0.02f * leg.upper_len
+                               ? glm::normalize(perp)
+                               : glm::normalize(s.body_c_.forward + kUp * 0.1f);
+    leg.pole_foot = glm::inverse(s.world_c_[static_cast<std::size_t>(leg.foot)]) * pole;
+    glm::vec3 v = pole - axis * glm::dot(pole, axis);
+    v = glm::length(v) > 1e-6f ? glm::normalize(v) : anyPerpendicular(axis);
+    const glm::vec3 hinge = glm::normalize(glm::cross(v, axis));
+    leg.tracked_frame_c_inv = glm::inverse(frameQuat(d1, hinge));
+    leg.tracked_shin_frame_c_inv = glm::inverse(frameQuat(d2, hinge));
+  }
+
+  // Which stations are worn: the four upper-body ones always (an uncalibrated one leaves its
+  // part in the calibration posture), a foot one when calibrated and its leg is driven.
+  for (int st = 0; st < kBodySiteCount; ++st) {
+    const BodySite site = static_cast<BodySite>(st);
+    s.worn_[static_cast<std::size_t>(st)] = !isFootSite(site);
+  }
+  for (int side = 0; side < 2; ++side) {
+    const std::size_t f = static_cast<std::size_t>(footSite(side));
+    const bool worn =
+        s.stations_[f].calibrated && s.legs_[static_cast<std::size_t>(side)].thigh >= 0;
+    s.worn_[f] = worn;
+    s.foot_worn_[static_cast<std::size_t>(side)] = worn;
+    // A tracked foot turns as its sensor says (no cone around the calibration rotation).
+    if (worn)
+      s.limit_[static_cast<std::size_t>(s.legs_[static_cast<std::size_t>(side)].foot)] = 0.0f;
   }
 
   // From each sensor to its segment's joint, sensor frame, tracker units.
@@ -289,6 +324,7 @@ Result<PostureSolver> PostureSolver::create(const Skeleton& skeleton, const Join
     const float scale = st == static_cast<int>(BodySite::kHead)         ? pr.torso
                         : st == static_cast<int>(BodySite::kLeftWrist)  ? pr.arm[0]
                         : st == static_cast<int>(BodySite::kRightWrist) ? pr.arm[1]
+                        : isFootSite(static_cast<BodySite>(st))         ? pr.height
                                                                         : 1.0f;
     s.pivot_[static_cast<std::size_t>(st)] =
         c.calibrated ? -(c.sensor_to_segment * c.offset) * scale : glm::vec3(0.0f);
@@ -309,6 +345,7 @@ void PostureSolver::reset() {
   for (Leg& leg : legs_) {
     leg.planted = false;
     leg.stepping = false;
+    leg.swivel_init = false;
   }
   for (int side = 0; side < 2; ++side) {
     arms_[static_cast<std::size_t>(side)].hinge = arms_[static_cast<std::size_t>(side)].hinge_c;
@@ -601,6 +638,61 @@ void PostureSolver::solveLeg(int side, double now, const glm::quat& pelvis_yaw,
   world_[ft] = glm::normalize(glm::angleAxis(foot_yaw, kUp) * world_c_[ft]);
 }
 
+void PostureSolver::solveTrackedLeg(int side, float dt, const glm::quat& w_foot,
+                                    const glm::vec3& p_ankle) {
+  Leg& leg = legs_[static_cast<std::size_t>(side)];
+  const std::size_t th = static_cast<std::size_t>(leg.thigh);
+  const std::size_t sh = static_cast<std::size_t>(leg.shin);
+  const std::size_t ft = static_cast<std::size_t>(leg.foot);
+  const glm::vec3 hip = pos_[th];
+  // Soft reach, as for the heuristic's legs: a straight leg's knee stays well conditioned.
+  const float reach = leg.upper_len + leg.lower_len;
+  const float soft = 0.0015f * reach;
+  glm::vec3 to_target = p_ankle - hip;
+  const float d = glm::length(to_target);
+  if (d > reach - soft && d > 1e-6f) {
+    const float d_soft = reach - soft + soft * (1.0f - std::exp(-(d - (reach - soft)) / soft));
+    to_target *= d_soft / d;
+  }
+  // The knee's side (the swivel, the direction across the hip-ankle line): toward where the
+  // foot points. Where the foot points along that line (a pointed toe in a kick) the side is
+  // ill-defined, so the swivel turns at most max_knee_swivel_deg_s from the last frame's
+  // instead of flipping.
+  glm::vec3 axis = to_target;
+  axis = glm::length(axis) > 1e-6f ? glm::normalize(axis) : -kUp;
+  const glm::vec3 pole = w_foot * leg.pole_foot;
+  glm::vec3 v = pole - axis * glm::dot(pole, axis);
+  v = glm::length(v) > 1e-6f ? glm::normalize(v) : anyPerpendicular(axis);
+  if (leg.swivel_init && dt > 0.0f) {
+    glm::vec3 prev = leg.swivel - axis * glm::dot(leg.swivel, axis);
+    if (glm::length(prev) > 1e-4f) {
+      prev = glm::normalize(prev);
+      const float angle = std::atan2(glm::dot(glm::cross(prev, v), axis), glm::dot(prev, v));
+      const float step = glm::radians(options_.max_knee_swivel_deg_s) * dt;
+      if (std::abs(angle) > step) {
+        v = glm::angleAxis(angle > 0.0f ? step : -step, axis) * prev;
+      }
+    }
+  }
+  leg.swivel = v;
+  leg.swivel_init = true;
+  glm::vec3 knee, reached;
+  twoBoneIk(hip, leg.upper_len, leg.lower_len, hip + to_target, v, knee, reached);
+  const glm::vec3 d1 = (knee - hip) / leg.upper_len;
+  const glm::vec3 d2 = glm::normalize(reached - knee);
+  // The knee's hinge: across the plane of the hip-ankle line and the swivel.
+  const glm::vec3 hinge = glm::normalize(glm::cross(v, axis));
+  world_[th] = glm::normalize(frameQuat(d1, hinge) * leg.tracked_frame_c_inv * world_c_[th]);
+  world_[sh] = glm::normalize(frameQuat(d2, hinge) * leg.tracked_shin_frame_c_inv * world_c_[sh]);
+  world_[ft] = w_foot;
+  // The heuristic's state follows, so a foot station that is lost for good hands over
+  // without a jump (planted where the foot is now).
+  leg.planted = true;
+  leg.stepping = false;
+  leg.foot_pos = reached;
+  leg.foot_yaw = pelvis_yaw_;
+}
+
 void PostureSolver::compose(const glm::vec3& hips_position, Posture& out) {
   // Local rotations from the world ones, parents first, with joint limits; undriven joints
   // keep their calibration rotation.
@@ -647,6 +739,7 @@ void PostureSolver::solve(const SensorFrame& frame, Posture& out) {
   std::array<glm::vec3, kBodySiteCount> tp{};
   std::array<glm::quat, kBodySiteCount> tq{};
   for (int s = 0; s < kBodySiteCount; ++s) {
+    if (!worn_[static_cast<std::size_t>(s)]) continue;  // a foot station nobody wears
     have[static_cast<std::size_t>(s)] =
         trackStation(s, frame, tp[static_cast<std::size_t>(s)], tq[static_cast<std::size_t>(s)]);
   }
@@ -810,8 +903,15 @@ void PostureSolver::solve(const SensorFrame& frame, Posture& out) {
     }
   }
 
-  // Legs.
-  for (int side = 0; side < 2; ++side) solveLeg(side, frame.time, pelvis_yaw, hips_pos);
+  // Legs: from the foot sensor when worn and tracked, else the stance's heuristic.
+  for (int side = 0; side < 2; ++side) {
+    const std::size_t f = static_cast<std::size_t>(footSite(side));
+    if (foot_worn_[static_cast<std::size_t>(side)] && have[f]) {
+      solveTrackedLeg(side, dt, seg_w[f], seg_p[f]);
+    } else {
+      solveLeg(side, frame.time, pelvis_yaw, hips_pos);
+    }
+  }
 
   compose(hips_pos, out);
   first_ = false;

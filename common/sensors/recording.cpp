@@ -116,12 +116,12 @@ bool readGlove(ByteReader& r, GloveReading& out, std::string& why) {
   return true;
 }
 
-bool readCalibration(ByteReader& r, CalibrationRecord& out, std::string& why) {
+bool readCalibration(ByteReader& r, CalibrationRecord& out, int stations, std::string& why) {
   out.start_time = r.f64();
   out.end_time = r.f64();
   out.pose = r.string(kMaxPose);
-  for (StationReading& s : out.stations) {
-    if (!readStation(r, s, why)) return false;
+  for (int s = 0; s < stations; ++s) {
+    if (!readStation(r, out.stations[static_cast<std::size_t>(s)], why)) return false;
   }
   for (GloveReading& g : out.gloves) {
     if (!readGlove(r, g, why)) return false;
@@ -133,7 +133,7 @@ bool readCalibration(ByteReader& r, CalibrationRecord& out, std::string& why) {
   return true;
 }
 
-bool readHeader(ByteReader& r, RecordingHeader& out, std::string& why) {
+bool readHeader(ByteReader& r, RecordingHeader& out, int station_count, std::string& why) {
   out.participant = r.string(4096);
   out.source = r.string(4096);
   const std::uint32_t stations = r.u32();
@@ -145,7 +145,7 @@ bool readHeader(ByteReader& r, RecordingHeader& out, std::string& why) {
     SensorMapEntry e;
     e.station = r.u8();
     const std::uint8_t site = r.u8();
-    if (site >= kBodySiteCount) {
+    if (site >= station_count) {
       why = fmt::format("unknown body site {}", site);
       return false;
     }
@@ -175,7 +175,7 @@ bool readHeader(ByteReader& r, RecordingHeader& out, std::string& why) {
   }
   if (has_calibration == 1) {
     CalibrationRecord c;
-    if (!readCalibration(r, c, why)) return false;
+    if (!readCalibration(r, c, station_count, why)) return false;
     out.calibration = std::move(c);
   }
   out.config_text = r.string(kRecordingMaxPayload);
@@ -186,15 +186,15 @@ bool readHeader(ByteReader& r, RecordingHeader& out, std::string& why) {
   return true;
 }
 
-bool readFrame(ByteReader& r, SensorFrame& out, std::string& why) {
+bool readFrame(ByteReader& r, SensorFrame& out, int stations, std::string& why) {
   out.time = r.f64();
   out.sequence = r.u64();
   if (!r.ok() || !finite(out.time)) {
     why = "frame time cut short or not finite";
     return false;
   }
-  for (StationReading& s : out.stations) {
-    if (!readStation(r, s, why)) return false;
+  for (int s = 0; s < stations; ++s) {
+    if (!readStation(r, out.stations[static_cast<std::size_t>(s)], why)) return false;
   }
   for (GloveReading& g : out.gloves) {
     if (!readGlove(r, g, why)) return false;
@@ -204,18 +204,34 @@ bool readFrame(ByteReader& r, SensorFrame& out, std::string& why) {
 
 }  // namespace
 
-void encodeRecordingFileHeader(std::vector<std::uint8_t>& out) {
-  out.insert(out.end(), std::begin(kMagic), std::end(kMagic));
-  ByteWriter(out).u32(kRecordingVersion);
+int recordingStationCount(std::uint32_t version) {
+  return version == 1 ? kUpperBodySiteCount : version == 2 ? kBodySiteCount : 0;
 }
 
-void encodeHeaderRecord(const RecordingHeader& h, std::vector<std::uint8_t>& out) {
+std::uint32_t recordingVersionFor(const RecordingHeader& header) {
+  for (const SensorMapEntry& e : header.stations) {
+    if (isFootSite(e.site)) return 2;
+  }
+  return kRecordingVersionFourStations;
+}
+
+void encodeRecordingFileHeader(std::vector<std::uint8_t>& out, std::uint32_t version) {
+  out.insert(out.end(), std::begin(kMagic), std::end(kMagic));
+  ByteWriter(out).u32(version);
+}
+
+void encodeHeaderRecord(const RecordingHeader& h, std::vector<std::uint8_t>& out,
+                        std::uint32_t version) {
+  const std::size_t stations = static_cast<std::size_t>(recordingStationCount(version));
   const std::size_t start = beginRecord(out, kTypeHeader);
   ByteWriter w(out);
   w.string(h.participant);
   w.string(h.source);
-  w.u32(static_cast<std::uint32_t>(h.stations.size()));
+  std::uint32_t listed = 0;
+  for (const SensorMapEntry& e : h.stations) listed += static_cast<std::size_t>(e.site) < stations;
+  w.u32(listed);
   for (const SensorMapEntry& e : h.stations) {
+    if (static_cast<std::size_t>(e.site) >= stations) continue;  // not in this version
     w.u8(static_cast<std::uint8_t>(e.station));
     w.u8(static_cast<std::uint8_t>(e.site));
   }
@@ -229,30 +245,34 @@ void encodeHeaderRecord(const RecordingHeader& h, std::vector<std::uint8_t>& out
     w.f64(h.calibration->start_time);
     w.f64(h.calibration->end_time);
     w.string(h.calibration->pose);
-    for (const StationReading& s : h.calibration->stations) writeStation(w, s);
+    for (std::size_t s = 0; s < stations; ++s) writeStation(w, h.calibration->stations[s]);
     for (const GloveReading& g : h.calibration->gloves) writeGlove(w, g);
   }
   w.string(h.config_text);
   finishRecord(out, start);
 }
 
-void encodeFrameRecord(const SensorFrame& f, std::vector<std::uint8_t>& out) {
+void encodeFrameRecord(const SensorFrame& f, std::vector<std::uint8_t>& out,
+                       std::uint32_t version) {
+  const std::size_t stations = static_cast<std::size_t>(recordingStationCount(version));
   const std::size_t start = beginRecord(out, kTypeFrame);
   ByteWriter w(out);
   w.f64(f.time);
   w.u64(f.sequence);
-  for (const StationReading& s : f.stations) writeStation(w, s);
+  for (std::size_t s = 0; s < stations; ++s) writeStation(w, f.stations[s]);
   for (const GloveReading& g : f.gloves) writeGlove(w, g);
   finishRecord(out, start);
 }
 
-void encodeCalibrationRecord(const CalibrationRecord& c, std::vector<std::uint8_t>& out) {
+void encodeCalibrationRecord(const CalibrationRecord& c, std::vector<std::uint8_t>& out,
+                             std::uint32_t version) {
+  const std::size_t stations = static_cast<std::size_t>(recordingStationCount(version));
   const std::size_t start = beginRecord(out, kTypeCalibration);
   ByteWriter w(out);
   w.f64(c.start_time);
   w.f64(c.end_time);
   w.string(c.pose);
-  for (const StationReading& s : c.stations) writeStation(w, s);
+  for (std::size_t s = 0; s < stations; ++s) writeStation(w, c.stations[s]);
   for (const GloveReading& g : c.gloves) writeGlove(w, g);
   finishRecord(out, start);
 }
@@ -263,21 +283,29 @@ constexpr std::size_t kRecordOverhead = 9;  // u32 size, u8 type, u32 CRC
 constexpr std::size_t kListedDamage = 3;    // stretches named in stop_reason
 
 // Payload sizes of the fixed-layout records (a calibration adds its pose's bytes).
-std::size_t framePayloadSize() {
-  static const std::size_t size = [] {
-    std::vector<std::uint8_t> out;
-    encodeFrameRecord(SensorFrame{}, out);
-    return out.size() - kRecordOverhead;
+std::size_t framePayloadSize(std::uint32_t version) {
+  static const std::array<std::size_t, 2> sizes = [] {
+    std::array<std::size_t, 2> out_sizes{};
+    for (std::uint32_t v = 1; v <= 2; ++v) {
+      std::vector<std::uint8_t> out;
+      encodeFrameRecord(SensorFrame{}, out, v);
+      out_sizes[v - 1] = out.size() - kRecordOverhead;
+    }
+    return out_sizes;
   }();
-  return size;
+  return sizes[version == 2 ? 1 : 0];
 }
-std::size_t calibrationPayloadBase() {
-  static const std::size_t size = [] {
-    std::vector<std::uint8_t> out;
-    encodeCalibrationRecord(CalibrationRecord{}, out);
-    return out.size() - kRecordOverhead;
+std::size_t calibrationPayloadBase(std::uint32_t version) {
+  static const std::array<std::size_t, 2> sizes = [] {
+    std::array<std::size_t, 2> out_sizes{};
+    for (std::uint32_t v = 1; v <= 2; ++v) {
+      std::vector<std::uint8_t> out;
+      encodeCalibrationRecord(CalibrationRecord{}, out, v);
+      out_sizes[v - 1] = out.size() - kRecordOverhead;
+    }
+    return out_sizes;
   }();
-  return size;
+  return sizes[version == 2 ? 1 : 0];
 }
 
 // How the bytes at a position frame as a record.
@@ -318,9 +346,10 @@ Framing frameAt(std::span<const std::uint8_t> bytes, std::size_t pos) {
 // Where a frame or calibration record starts at or after `from` (the resynchronisation
 // after a damaged stretch), or bytes.size(). Only a size that fits the type is checked
 // with the CRC, so random bytes cost little.
-std::size_t nextRecord(std::span<const std::uint8_t> bytes, std::size_t from) {
-  const std::size_t frame = framePayloadSize();
-  const std::size_t calibration = calibrationPayloadBase();
+std::size_t nextRecord(std::span<const std::uint8_t> bytes, std::size_t from,
+                       std::uint32_t version) {
+  const std::size_t frame = framePayloadSize(version);
+  const std::size_t calibration = calibrationPayloadBase(version);
   for (std::size_t q = from; q + kRecordOverhead <= bytes.size(); ++q) {
     const std::uint8_t type = bytes[q + 4];
     if (type != kTypeFrame && type != kTypeCalibration) continue;
@@ -361,8 +390,9 @@ Result<Recording> decodeRecording(std::span<const std::uint8_t> bytes, std::stri
   }
   std::uint32_t version;
   std::memcpy(&version, bytes.data() + 8, 4);
-  if (version != kRecordingVersion) {
-    return fail("{}: recording format version {} (this build reads {})", source, version,
+  const int station_count = recordingStationCount(version);
+  if (station_count == 0) {
+    return fail("{}: recording format version {} (this build reads 1 to {})", source, version,
                 kRecordingVersion);
   }
   Recording rec;
@@ -378,7 +408,7 @@ Result<Recording> decodeRecording(std::span<const std::uint8_t> bytes, std::stri
     }
     ByteReader r(bytes.subspan(pos + 5, f.size));
     std::string why;
-    if (!readHeader(r, rec.header, why)) {
+    if (!readHeader(r, rec.header, station_count, why)) {
       return fail("{}: header record at byte {}: {}", source, pos, why);
     }
     if (r.remaining() != 0) {
@@ -399,7 +429,7 @@ Result<Recording> decodeRecording(std::span<const std::uint8_t> bytes, std::stri
   while (pos < bytes.size()) {
     const Framing f = frameAt(bytes, pos);
     if (!f.ok) {
-      skip(nextRecord(bytes, pos + 1), f.why);
+      skip(nextRecord(bytes, pos + 1, version), f.why);
       ++index;
       continue;
     }
@@ -411,9 +441,9 @@ Result<Recording> decodeRecording(std::span<const std::uint8_t> bytes, std::stri
     CalibrationRecord calibration;
     bool good = false;
     if (f.type == kTypeFrame) {
-      good = readFrame(r, frame, why);
+      good = readFrame(r, frame, station_count, why);
     } else if (f.type == kTypeCalibration) {
-      good = readCalibration(r, calibration, why);
+      good = readCalibration(r, calibration, station_count, why);
     } else {
       why = f.type == kTypeHeader ? std::string("a second header record")
                                   : fmt::format("unknown record type {}", f.type);
@@ -455,8 +485,9 @@ Result<std::unique_ptr<RecordingWriter>> RecordingWriter::create(const std::stri
   w->fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
   if (w->fd_ < 0) return fail("{}: cannot create recording: {}", path, std::strerror(errno));
   w->buffer_.reserve(4096);
-  encodeRecordingFileHeader(w->buffer_);
-  encodeHeaderRecord(header, w->buffer_);
+  w->version_ = recordingVersionFor(header);
+  encodeRecordingFileHeader(w->buffer_, w->version_);
+  encodeHeaderRecord(header, w->buffer_, w->version_);
   if (Status s = w->writeRecord(); !s) return s.error();
   return w;
 }
@@ -482,14 +513,14 @@ Status RecordingWriter::writeRecord() {
 }
 
 Status RecordingWriter::append(const SensorFrame& frame) {
-  encodeFrameRecord(frame, buffer_);
+  encodeFrameRecord(frame, buffer_, version_);
   if (Status s = writeRecord(); !s) return s;
   ++frames_;
   return {};
 }
 
 Status RecordingWriter::appendCalibration(const CalibrationRecord& record) {
-  encodeCalibrationRecord(record, buffer_);
+  encodeCalibrationRecord(record, buffer_, version_);
   return writeRecord();
 }
 

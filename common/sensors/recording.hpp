@@ -9,6 +9,10 @@
 // Record types: 1 header (must come first: participant, sensor map, optional calibration,
 // the sensors config text), 2 frame (one SensorFrame, fixed size), 3 calibration (a
 // calibration taken during the session: its window and the averaged readings).
+// Versions: 1 stores four stations (head, chest, wrists) in every frame and calibration;
+// 2 stores six (the feet too). The writer writes version 1 unless the header's sensor map
+// names a foot station, so four-station files are what they always were; the reader reads
+// both (a version 1 file's foot stations read as not valid).
 //
 // The writer appends each record with a single write() on an O_APPEND descriptor, so a
 // process killed mid-write loses at most the record being written. The reader keeps every
@@ -33,12 +37,16 @@
 
 namespace vistel {
 
-inline constexpr std::uint32_t kRecordingVersion = 1;
+inline constexpr std::uint32_t kRecordingVersion = 2;              // the newest this build reads
+inline constexpr std::uint32_t kRecordingVersionFourStations = 1;  // no foot stations
+// Stations per frame and calibration record in a format version (1: 4, 2: 6), 0 if unknown.
+int recordingStationCount(std::uint32_t version);
 inline constexpr std::size_t kRecordingMaxPayload = 1u << 20;
 
 // Which tracker station was worn where, and which gloves were on.
 struct SensorMapEntry {
   int station = 0;  // device station number (1..4), 0 for a simulated or HID source
+  // (a version 1 file names only the four upper-body sites)
   BodySite site = BodySite::kHead;
 };
 struct GloveMapEntry {
@@ -100,11 +108,20 @@ struct Recording {
 Result<Recording> decodeRecording(std::span<const std::uint8_t> bytes, std::string_view source);
 Result<Recording> loadRecording(const std::string& path);
 
-// Encodes records (the writer's format), for tests and tools.
-void encodeRecordingFileHeader(std::vector<std::uint8_t>& out);
-void encodeHeaderRecord(const RecordingHeader& header, std::vector<std::uint8_t>& out);
-void encodeFrameRecord(const SensorFrame& frame, std::vector<std::uint8_t>& out);
-void encodeCalibrationRecord(const CalibrationRecord& record, std::vector<std::uint8_t>& out);
+// The version the writer uses for a header: 2 when its sensor map names a foot station,
+// else 1.
+std::uint32_t recordingVersionFor(const RecordingHeader& header);
+
+// Encodes records (the writer's format), for tests and tools, in a format version (1 or 2;
+// version 1 leaves out the foot stations).
+void encodeRecordingFileHeader(std::vector<std::uint8_t>& out,
+                               std::uint32_t version = kRecordingVersionFourStations);
+void encodeHeaderRecord(const RecordingHeader& header, std::vector<std::uint8_t>& out,
+                        std::uint32_t version = kRecordingVersionFourStations);
+void encodeFrameRecord(const SensorFrame& frame, std::vector<std::uint8_t>& out,
+                       std::uint32_t version = kRecordingVersionFourStations);
+void encodeCalibrationRecord(const CalibrationRecord& record, std::vector<std::uint8_t>& out,
+                             std::uint32_t version = kRecordingVersionFourStations);
 
 class RecordingWriter {
  public:
@@ -128,6 +145,7 @@ class RecordingWriter {
   Status writeRecord();
 
   int fd_ = -1;
+  std::uint32_t version_ = kRecordingVersionFourStations;
   std::string path_;
   std::vector<std::uint8_t> buffer_;
   std::uint64_t frames_ = 0;

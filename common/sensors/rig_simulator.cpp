@@ -48,6 +48,14 @@ Result<std::unique_ptr<RigSimulator>> RigSimulator::create(Skeleton body, const 
   }
   poseSkeleton(sim->body_, sim->calibration_, sim->model_);
   sim->sensors_ = attachSensors(roles, sim->model_, sim->options_.mounts);
+  for (int s = 0; s < kBodySiteCount; ++s) {
+    if (isFootSite(static_cast<BodySite>(s)) && !sim->options_.foot_trackers) continue;
+    if (sim->sensors_[static_cast<std::size_t>(s)].segment < 0) {
+      return fail("simulator: the skeleton has no segment for the {} sensor",
+                  bodySiteName(static_cast<BodySite>(s)));
+    }
+    sim->worn_[static_cast<std::size_t>(sim->worn_count_++)] = s;
+  }
   std::vector<glm::vec3> positions(sim->model_.size());
   for (std::size_t j = 0; j < positions.size(); ++j) positions[j] = glm::vec3(sim->model_[j][3]);
   const BodyFrame frame = bodyFrameAt(roles, positions);
@@ -64,7 +72,8 @@ Result<std::unique_ptr<RigSimulator>> RigSimulator::create(Skeleton body, const 
   sim->schedule_ = sim->options_.dropouts;
   if (sim->options_.random_dropout_rate_hz > 0.0) {
     SimRandom drops(sim->options_.seed ^ 0xD50F0C7ull);
-    for (int s = 0; s < kBodySiteCount; ++s) {
+    for (int k = 0; k < sim->worn_count_; ++k) {
+      const int s = sim->worn_[static_cast<std::size_t>(k)];
       double t = 0.0;
       for (;;) {
         t += -std::log(1.0 - drops.uniform()) / sim->options_.random_dropout_rate_hz;
@@ -96,11 +105,12 @@ PollResult RigSimulator::poll(double /*timeout_s*/, SensorFrame& frame) {
   sampleBody(t_measured);
 
   // Which stations measure on this tick.
-  const int first = options_.shared_rate ? static_cast<int>(tick_ % kBodySiteCount) : 0;
-  const int last = options_.shared_rate ? first + 1 : kBodySiteCount;
+  const int first = options_.shared_rate ? static_cast<int>(tick_ % worn_count_) : 0;
+  const int last = options_.shared_rate ? first + 1 : worn_count_;
   const float sigma_p = options_.position_noise_m / std::sqrt(3.0f);
   const float sigma_r = glm::radians(options_.orientation_noise_deg) / std::sqrt(3.0f);
-  for (int s = first; s < last; ++s) {
+  for (int k = first; k < last; ++k) {
+    const int s = worn_[static_cast<std::size_t>(k)];
     StationReading& r = state_.stations[s];
     const BodySite site = static_cast<BodySite>(s);
     if (droppedOut(site, t_measured)) {

@@ -1,15 +1,16 @@
-// RigSimulator: a SensorSource that derives what the four trackers and two gloves would
-// report from a moving body (a mocap clip sampled over time), so the solver can be scored
-// against the clip's true joints (DESIGN.md §5).
+// RigSimulator: a SensorSource that derives what the four trackers (six with foot_trackers)
+// and two gloves would report from a moving body (a mocap clip sampled over time), so the
+// solver can be scored against the clip's true joints (DESIGN.md §5).
 //
 // Each station is a sensor mounted on its segment (SensorMount, fixed at the calibration
 // posture = the body at t = 0). Tracker space is model space. Timing: ticks at rate_hz; with
-// shared_rate the stations take turns (a FASTRAK's 120 Hz shared by 4 receivers gives each
-// 30 Hz), else all sample every tick. A reading arriving at tick time t measured the body
-// at t - latency. Noise: Gaussian, isotropic, given as the RMS of the 3-D position error and
-// of the rotation angle; deterministic for a seed (own generator). Dropouts: scheduled
-// intervals and/or random ones (Poisson, rate per station) during which the station reports
-// nothing (valid = false). Gloves report a synthetic pattern for the fingers and, when
+// shared_rate the worn stations take turns (a FASTRAK's 120 Hz shared by 4 receivers gives
+// each 30 Hz; 6 stations at 120 Hz get 20 Hz each), else all sample every tick. Stations
+// not worn (the feet without foot_trackers) are never valid. A reading arriving at tick time t
+// measured the body at t - latency. Noise: Gaussian, isotropic, given as the RMS of the 3-D
+// position error and of the rotation angle; deterministic for a seed (own generator). Dropouts:
+// scheduled intervals and/or random ones (Poisson, rate per station) during which the station
+// reports nothing (valid = false). Gloves report a synthetic pattern for the fingers and, when
 // wrist_from_motion, the body's own wrist flexion/deviation (hand_model.hpp).
 //
 // poll() never waits: every call produces the next tick's frame, kEnd after hold + duration.
@@ -56,6 +57,9 @@ struct SimOptions {
   double random_dropout_rate_hz = 0.0;  // expected dropouts per second per station
   double random_dropout_s = 0.25;       // length of each random dropout
   std::array<SensorMount, kBodySiteCount> mounts = defaultSensorMounts();
+  // Also a tracker on each foot (six stations, same noise model); the skeleton must have
+  // foot joints.
+  bool foot_trackers = false;
   GlovePattern glove = GlovePattern::kNeutral;
   double glove_period_s = 2.0;
   bool glove_wrist_from_motion = true;
@@ -90,7 +94,7 @@ class RigSimulator final : public SensorSource {
   double bodyTime(double t) const { return std::max(0.0, t - options_.hold_s); }
   // The true posture at frame time t.
   void truth(double t, Posture& out) const { sampler_(bodyTime(t), out); }
-  // Where each sensor sits on its segment.
+  // Where each sensor sits on its segment (segment -1: the skeleton lacks it).
   const std::array<AttachedSensor, kBodySiteCount>& sensors() const { return sensors_; }
   // True when the site is in a (scheduled or random) dropout at time t.
   bool droppedOut(BodySite site, double t) const;
@@ -106,6 +110,8 @@ class RigSimulator final : public SensorSource {
   SimOptions options_;
   Posture calibration_;
   std::array<AttachedSensor, kBodySiteCount> sensors_{};
+  std::array<int, kBodySiteCount> worn_{};  // the worn sites, in order
+  int worn_count_ = 0;
   std::array<WristModel, 2> wrists_{};
   std::vector<StationDropout> schedule_;  // scheduled + random dropouts
   SimRandom rng_;

@@ -260,7 +260,9 @@ void readHid(Reader& r, const toml::table& t, HidConfig& hid) {
                       {{"head", BodySite::kHead},
                        {"chest", BodySite::kChest},
                        {"left_wrist", BodySite::kLeftWrist},
-                       {"right_wrist", BodySite::kRightWrist}});
+                       {"right_wrist", BodySite::kRightWrist},
+                       {"left_foot", BodySite::kLeftFoot},
+                       {"right_foot", BodySite::kRightFoot}});
     l.position_offset = static_cast<int>(r.integer(*s, "position_offset", w, 0, 0, 4095));
     l.position_type = hidType(r, *s, "position_type", w);
     l.position_scale = static_cast<float>(r.number(*s, "position_scale", w, 1.0, -1e6, 1e6));
@@ -459,7 +461,9 @@ Result<SensorSetup> parseSensorSetup(std::string_view toml_text, std::string_vie
                       {{"head", BodySite::kHead},
                        {"chest", BodySite::kChest},
                        {"left_wrist", BodySite::kLeftWrist},
-                       {"right_wrist", BodySite::kRightWrist}});
+                       {"right_wrist", BodySite::kRightWrist},
+                       {"left_foot", BodySite::kLeftFoot},
+                       {"right_foot", BodySite::kRightFoot}});
     const int si = static_cast<int>(m.site);
     if (seen[si]) r.fail(w, fmt::format("site '{}' listed twice", bodySiteName(m.site)));
     seen[si] = true;
@@ -476,12 +480,19 @@ Result<SensorSetup> parseSensorSetup(std::string_view toml_text, std::string_vie
     }
   }
   if (setup.tracker_kind == TrackerKind::kFastrak && !r.failed()) {
-    for (int s = 0; s < kBodySiteCount; ++s) {
+    for (int s = 0; s < kUpperBodySiteCount; ++s) {
       if (!seen[s]) {
         r.fail("station", fmt::format("no station is worn at '{}' (the solver needs all four)",
                                       bodySiteName(static_cast<BodySite>(s))));
         break;
       }
+    }
+    if (setup.tracker.stations.size() > static_cast<std::size_t>(kFastrakMaxStations) &&
+        !r.failed()) {
+      r.fail("station",
+             fmt::format("{} stations, but a FASTRAK has {} receivers (foot trackers need a "
+                         "tracker with six, e.g. kind = \"hid\")",
+                         setup.tracker.stations.size(), kFastrakMaxStations));
     }
   }
 
@@ -511,10 +522,20 @@ Result<SensorSetup> parseSensorSetup(std::string_view toml_text, std::string_vie
   }
 
   if (const toml::table* h = r.table(root, "hid", "")) readHid(r, *h, setup.hid);
-  if (setup.tracker_kind == TrackerKind::kHid && setup.hid.stations.size() != kBodySiteCount &&
-      !r.failed()) {
-    r.fail("hid.station", fmt::format("{} stations laid out (the solver needs all four)",
-                                      setup.hid.stations.size()));
+  if (setup.tracker_kind == TrackerKind::kHid && !r.failed()) {
+    // The four upper-body sites, each once; the feet optional.
+    std::array<int, kBodySiteCount> laid{};
+    for (const HidStationLayout& l : setup.hid.stations) ++laid[static_cast<std::size_t>(l.site)];
+    for (int site = 0; site < kBodySiteCount; ++site) {
+      const int n = laid[static_cast<std::size_t>(site)];
+      if (n > 1 || (n == 0 && site < kUpperBodySiteCount)) {
+        r.fail("hid.station",
+               fmt::format("{} stations laid out at '{}' (the solver needs the four upper-body "
+                           "sites once each; the feet are optional)",
+                           n, bodySiteName(static_cast<BodySite>(site))));
+        break;
+      }
+    }
   }
 
   // Solver.
@@ -547,7 +568,9 @@ Result<SensorSetup> parseSensorSetup(std::string_view toml_text, std::string_vie
                  "chest_beta",
                  "ease_intervals",
                  "hips_cutoff_hz",
-                 "hips_beta"});
+                 "hips_beta",
+                 "foot_position_cutoff_hz",
+                 "foot_beta"});
     SolverOptions& o = setup.solver;
     o.filter_kind = r.choice(
         *t, "station_filter", w, o.filter_kind,
@@ -565,6 +588,11 @@ Result<SensorSetup> parseSensorSetup(std::string_view toml_text, std::string_vie
         if (site == static_cast<int>(BodySite::kHead)) {
           f.position_cutoff_hz = static_cast<float>(
               r.number(*t, "head_position_cutoff_hz", w, f.position_cutoff_hz, 0.01, 100));
+        } else if (isFootSite(static_cast<BodySite>(site))) {
+          f.position_cutoff_hz = static_cast<float>(
+              r.number(*t, "foot_position_cutoff_hz", w, f.position_cutoff_hz, 0.01, 100));
+          f.position_beta =
+              static_cast<float>(r.number(*t, "foot_beta", w, f.position_beta, 0, 100));
         } else {
           f.position_cutoff_hz = static_cast<float>(
               r.number(*t, "wrist_position_cutoff_hz", w, f.position_cutoff_hz, 0.01, 100));
@@ -651,6 +679,9 @@ Result<SensorSetup> parseSensorSetup(std::string_view toml_text, std::string_vie
     s.random_dropout_s = r.number(*t, "random_dropout_s", w, s.random_dropout_s, 0, 100);
   }
   setup.sim.mounts = setup.mounts;
+  // A setup that lists a foot station simulates both feet (six stations).
+  setup.sim.foot_trackers = seen[static_cast<std::size_t>(BodySite::kLeftFoot)] ||
+                            seen[static_cast<std::size_t>(BodySite::kRightFoot)];
 
   // Force feedback.
   if (const toml::table* t = r.table(root, "force_feedback", "")) {

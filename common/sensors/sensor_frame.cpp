@@ -5,8 +5,8 @@
 namespace vistel {
 namespace {
 
-constexpr std::array<std::string_view, kBodySiteCount> kSiteNames = {"head", "chest", "left_wrist",
-                                                                     "right_wrist"};
+constexpr std::array<std::string_view, kBodySiteCount> kSiteNames = {
+    "head", "chest", "left_wrist", "right_wrist", "left_foot", "right_foot"};
 constexpr std::array<std::string_view, kHandCount> kHandNames = {"left", "right"};
 
 }  // namespace

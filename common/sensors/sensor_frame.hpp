@@ -1,5 +1,6 @@
 // SensorFrame: one timestamped snapshot of a participant's sensors (DESIGN.md §5): four
-// 6-DOF tracker stations (head, chest, both wrists) and two data gloves.
+// 6-DOF tracker stations (head, chest, both wrists), optionally two more on the feet (six
+// sensors; a station nobody wears simply never becomes valid), and two data gloves.
 //
 // Space: tracker space, metres, right-handed, +Y up (a device's own axes are mapped into it
 // by the driver's transmitter transform). A station's orientation takes vectors from the
@@ -18,11 +19,26 @@
 
 namespace vistel {
 
-// Where a tracker station is worn.
-enum class BodySite : std::uint8_t { kHead = 0, kChest = 1, kLeftWrist = 2, kRightWrist = 3 };
-inline constexpr int kBodySiteCount = 4;
+// Where a tracker station is worn. The first four are always worn; the feet (on the instep,
+// anchored at the ankle joint) are optional.
+enum class BodySite : std::uint8_t {
+  kHead = 0,
+  kChest = 1,
+  kLeftWrist = 2,
+  kRightWrist = 3,
+  kLeftFoot = 4,
+  kRightFoot = 5,
+};
+inline constexpr int kBodySiteCount = 6;
+inline constexpr int kUpperBodySiteCount = 4;  // head, chest, wrists: the sites always worn
+inline constexpr bool isFootSite(BodySite site) {
+  return site == BodySite::kLeftFoot || site == BodySite::kRightFoot;
+}
+inline constexpr BodySite footSite(int side) {  // 0 left, 1 right
+  return side == 0 ? BodySite::kLeftFoot : BodySite::kRightFoot;
+}
 
-// "head", "chest", "left_wrist", "right_wrist".
+// "head", "chest", "left_wrist", "right_wrist", "left_foot", "right_foot".
 std::string_view bodySiteName(BodySite site);
 std::optional<BodySite> parseBodySite(std::string_view name);
 

@@ -11,6 +11,8 @@ std::array<SensorMount, kBodySiteCount> defaultSensorMounts() {
   m[1] = {BodySite::kChest, {0.0f, 0.05f, 0.09f}, glm::angleAxis(glm::radians(-8.0f), x)};
   m[2] = {BodySite::kLeftWrist, {0.025f, 0.04f, 0.0f}, glm::angleAxis(glm::radians(20.0f), z)};
   m[3] = {BodySite::kRightWrist, {-0.025f, 0.04f, 0.0f}, glm::angleAxis(glm::radians(-20.0f), z)};
+  m[4] = {BodySite::kLeftFoot, {0.0f, 0.0f, 0.07f}, glm::angleAxis(glm::radians(-25.0f), x)};
+  m[5] = {BodySite::kRightFoot, {0.0f, 0.0f, 0.07f}, glm::angleAxis(glm::radians(-25.0f), x)};
   return m;
 }
 
@@ -24,6 +26,10 @@ int mountSegment(const JointRoles& roles, BodySite site) {
       return roles[Role::kLForearm];
     case BodySite::kRightWrist:
       return roles[Role::kRForearm];
+    case BodySite::kLeftFoot:
+      return roles[footRole(0)];
+    case BodySite::kRightFoot:
+      return roles[footRole(1)];
   }
   return -1;
 }
@@ -51,6 +57,11 @@ std::array<AttachedSensor, kBodySiteCount> attachSensors(const JointRoles& roles
     const int s = static_cast<int>(mount.site);
     const int seg = mountSegment(roles, mount.site);
     const int anchor = mountAnchor(roles, mount.site);
+    if (seg < 0 || anchor < 0 || static_cast<std::size_t>(seg) >= model.size() ||
+        static_cast<std::size_t>(anchor) >= model.size()) {
+      out[s] = AttachedSensor{};  // the skeleton has no such segment (e.g. no feet)
+      continue;
+    }
     const glm::quat seg_rot = glm::normalize(glm::quat_cast(glm::mat3(model[seg])));
     const glm::vec3 p_world = positions[anchor] + body.matrix() * mount.offset;
     out[s].segment = seg;

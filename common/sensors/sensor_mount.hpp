@@ -4,9 +4,9 @@
 // A mount is given in the body frame of the calibration posture (BodyFrame: left, up,
 // forward; metres), relative to an anchor point: the head joint (head sensor), the chest
 // segment's joint (sternum sensor), the hand joint, i.e. the distal end of the forearm
-// (wrist sensors). The head sensor rides on the head, the chest sensor on the chest segment
-// and the wrist sensors on the forearms, so a wrist sensor's orientation gives the forearm
-// axis (DESIGN.md §5).
+// (wrist sensors), the foot joint, i.e. the ankle (foot sensors, riding on the foot). The head
+// sensor rides on the head, the chest sensor on the chest segment and the wrist sensors on the
+// forearms, so a wrist sensor's orientation gives the forearm axis (DESIGN.md §5).
 #pragma once
 
 #include <array>
@@ -27,11 +27,13 @@ struct SensorMount {
 };
 
 // Head 11 cm above the head joint, sternum 9 cm forward of the chest joint, wrist sensors
-// on the back of the forearm 4 cm above the wrist; sensor axes turned a little (as a real
-// strap would) so that calibration has something to find.
+// on the back of the forearm 4 cm above the wrist, foot sensors on the instep 7 cm forward
+// of the ankle joint; sensor axes turned a little (as a real strap would) so that
+// calibration has something to find.
 std::array<SensorMount, kBodySiteCount> defaultSensorMounts();
 
-// The segment a site's sensor rides on, and its anchor joint (see above).
+// The segment a site's sensor rides on, and its anchor joint (see above); -1 when the
+// skeleton lacks it (a foot site on a skeleton without feet).
 int mountSegment(const JointRoles& roles, BodySite site);
 int mountAnchor(const JointRoles& roles, BodySite site);
 
@@ -43,7 +45,8 @@ struct AttachedSensor {
 };
 
 // Attaches mounts to their segments at the calibration posture, given that posture's
-// model-space joint transforms (njoint).
+// model-space joint transforms (njoint). A site whose segment the skeleton lacks gets
+// segment -1 (sensorPose must not be called on it).
 std::array<AttachedSensor, kBodySiteCount> attachSensors(
     const JointRoles& roles, std::span<const glm::mat4> calibration_model,
     std::span<const SensorMount> mounts);

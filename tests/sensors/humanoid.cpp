@@ -1,5 +1,6 @@
 #include "tests/sensors/humanoid.hpp"
 
+#include <algorithm>
 #include <map>
 #include <string>
 
@@ -97,12 +98,15 @@ float angleDegrees(const glm::quat& a, const glm::quat& b) {
 }
 
 SensorFrame exactFrame(const Skeleton& skeleton, const Posture& posture,
-                       std::span<const AttachedSensor> sensors, double time) {
+                       std::span<const AttachedSensor> sensors, double time, bool feet) {
   std::vector<glm::mat4> model(static_cast<std::size_t>(skeleton.jointCount()));
   poseSkeleton(skeleton, posture, model);
   SensorFrame f;
   f.time = time;
-  for (int s = 0; s < kBodySiteCount; ++s) {
+  const int count =
+      std::min(feet ? kBodySiteCount : kUpperBodySiteCount, static_cast<int>(sensors.size()));
+  for (int s = 0; s < count; ++s) {
+    if (sensors[static_cast<std::size_t>(s)].segment < 0) continue;
     StationReading& r = f.stations[static_cast<std::size_t>(s)];
     sensorPose(sensors[static_cast<std::size_t>(s)], model, r.position, r.orientation);
     r.time = time;

@@ -29,8 +29,9 @@ void setWorldRotation(const Skeleton& skeleton, Posture& p, int j, const glm::qu
 // Angle between two rotations in degrees, precise near zero (acos is not).
 float angleDegrees(const glm::quat& a, const glm::quat& b);
 
-// A noiseless sensor frame for a posture: every station at its attached sensor's pose.
+// A noiseless sensor frame for a posture: every station at its attached sensor's pose (the
+// four upper-body ones; the feet too when `feet`).
 SensorFrame exactFrame(const Skeleton& skeleton, const Posture& posture,
-                       std::span<const AttachedSensor> sensors, double time);
+                       std::span<const AttachedSensor> sensors, double time, bool feet = false);
 
 }  // namespace vistel::test

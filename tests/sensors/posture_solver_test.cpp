@@ -200,7 +200,7 @@ TEST(Calibration, FindsTheMountsAndFailsWithoutAStation) {
       test::exactFrame(rig.skeleton, rig.calibration, rig.sensors, 0.0)};
   auto cal = calibrateBody(rig.skeleton, rig.roles, rig.calibration, frames, {});
   ASSERT_TRUE(cal.ok());
-  for (int s = 0; s < kBodySiteCount; ++s) {
+  for (int s = 0; s < kUpperBodySiteCount; ++s) {
     const StationCalibration& sc = cal->stations[static_cast<std::size_t>(s)];
     EXPECT_EQ(sc.segment, rig.sensors[static_cast<std::size_t>(s)].segment);
     EXPECT_LT(glm::distance(sc.offset, rig.sensors[static_cast<std::size_t>(s)].local_offset),

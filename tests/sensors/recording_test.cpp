@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <csignal>
+#include <cstring>
 #include <filesystem>
 #include <random>
 #include <thread>
@@ -24,11 +25,13 @@
 namespace vistel {
 namespace {
 
-SensorFrame randomFrame(SimRandom& rng, std::uint64_t seq) {
+// The four upper-body stations (what a version 1 file holds), or all six.
+SensorFrame randomFrame(SimRandom& rng, std::uint64_t seq, int stations = kUpperBodySiteCount) {
   SensorFrame f;
   f.time = 0.01 * static_cast<double>(seq);
   f.sequence = seq;
-  for (StationReading& s : f.stations) {
+  for (int k = 0; k < stations; ++k) {
+    StationReading& s = f.stations[static_cast<std::size_t>(k)];
     s.valid = rng.uniform() > 0.1;
     s.status = rng.uniform() > 0.9 ? 'W' : ' ';
     s.time = f.time - 0.004;
@@ -530,6 +533,145 @@ TEST(Recording, WriterKilledMidStreamLosesAtMostOneRecord) {
     EXPECT_EQ(rec->damage.size(), 1u) << rec->stop_reason;
   }
   for (std::size_t i = 0; i < rec->frames.size(); ++i) ASSERT_EQ(rec->frames[i].sequence, i);
+}
+
+// A version 1 file as the four-station build wrote it, put together byte by byte here (not by
+// the encoders): the current reader still reads it, the feet not valid.
+void putU32(std::vector<std::uint8_t>& b, std::uint32_t v) {
+  for (int k = 0; k < 4; ++k) b.push_back(static_cast<std::uint8_t>(v >> (8 * k)));
+}
+void putF32(std::vector<std::uint8_t>& b, float f) {
+  std::uint32_t v;
+  std::memcpy(&v, &f, 4);
+  putU32(b, v);
+}
+void putF64(std::vector<std::uint8_t>& b, double d) {
+  std::uint64_t v;
+  std::memcpy(&v, &d, 8);
+  putU32(b, static_cast<std::uint32_t>(v));
+  putU32(b, static_cast<std::uint32_t>(v >> 32));
+}
+void putRecord(std::vector<std::uint8_t>& b, std::uint8_t type,
+               const std::vector<std::uint8_t>& payload) {
+  putU32(b, static_cast<std::uint32_t>(payload.size()));
+  const std::size_t crc_from = b.size();
+  b.push_back(type);
+  b.insert(b.end(), payload.begin(), payload.end());
+  putU32(b, crc32(std::span<const std::uint8_t>(b).subspan(crc_from)));
+}
+
+TEST(Recording, VersionOneFourStationFileStillReads) {
+  std::vector<std::uint8_t> bytes = {'V', 'R', 'E', 'C', '\r', '\n', 0x1a, '\n'};
+  putU32(bytes, 1);
+  std::vector<std::uint8_t> header;
+  putU32(header, 2);  // participant
+  header.insert(header.end(), {'a', 'b'});
+  putU32(header, 3);  // source
+  header.insert(header.end(), {'s', 'i', 'm'});
+  putU32(header, 4);  // station map: number, site
+  for (std::uint8_t st = 0; st < 4; ++st) header.insert(header.end(), {std::uint8_t(st + 1), st});
+  putU32(header, 0);    // gloves
+  header.push_back(0);  // no calibration
+  putU32(header, 0);    // config text
+  putRecord(bytes, 1, header);
+  for (int k = 0; k < 3; ++k) {
+    std::vector<std::uint8_t> frame;
+    putF64(frame, 0.5 + k);                        // time
+    putU32(frame, static_cast<std::uint32_t>(k));  // sequence, u64
+    putU32(frame, 0);
+    for (int st = 0; st < 4; ++st) {  // four stations, 38 bytes each
+      frame.push_back(1);             // valid
+      frame.push_back(' ');           // status
+      putF64(frame, 0.49 + k);
+      for (float v : {0.1f * static_cast<float>(st), 1.0f, static_cast<float>(k)}) putF32(frame, v);
+      for (float v : {1.0f, 0.0f, 0.0f, 0.0f}) putF32(frame, v);
+    }
+    for (int h = 0; h < 2; ++h) {  // two gloves, 97 bytes each
+      frame.push_back(0);
+      putF64(frame, 0.0);
+      for (int a = 0; a < kGloveSensorCount; ++a) putF32(frame, 0.0f);
+    }
+    ASSERT_EQ(frame.size(), 362u);
+    putRecord(bytes, 2, frame);
+  }
+  auto rec = decodeRecording(bytes, "v1.vrec");
+  ASSERT_TRUE(rec.ok()) << rec.error().message;
+  EXPECT_TRUE(rec->complete) << rec->stop_reason;
+  EXPECT_EQ(rec->header.participant, "ab");
+  ASSERT_EQ(rec->header.stations.size(), 4u);
+  EXPECT_EQ(rec->header.stations[3].site, BodySite::kRightWrist);
+  ASSERT_EQ(rec->frames.size(), 3u);
+  for (int k = 0; k < 3; ++k) {
+    const SensorFrame& f = rec->frames[static_cast<std::size_t>(k)];
+    EXPECT_EQ(f.sequence, static_cast<std::uint64_t>(k));
+    EXPECT_TRUE(f.station(BodySite::kRightWrist).valid);
+    EXPECT_EQ(f.station(BodySite::kRightWrist).position, glm::vec3(0.3f, 1.0f, k));
+    EXPECT_FALSE(f.station(BodySite::kLeftFoot).valid);
+    EXPECT_FALSE(f.station(BodySite::kRightFoot).valid);
+  }
+  // The encoders' version 1 is the same bytes.
+  std::vector<std::uint8_t> again;
+  encodeRecordingFileHeader(again);
+  RecordingHeader h = rec->header;
+  encodeHeaderRecord(h, again);
+  for (const SensorFrame& f : rec->frames) encodeFrameRecord(f, again);
+  EXPECT_EQ(again, bytes);
+}
+
+TEST(Recording, SixStationsRoundTripAsVersionTwo) {
+  RecordingHeader header = sampleHeader();
+  EXPECT_EQ(recordingVersionFor(header), 1u);
+  header.stations.push_back({0, BodySite::kLeftFoot});
+  header.stations.push_back({0, BodySite::kRightFoot});
+  EXPECT_EQ(recordingVersionFor(header), 2u);
+  header.calibration->stations[static_cast<std::size_t>(BodySite::kRightFoot)].valid = true;
+  header.calibration->stations[static_cast<std::size_t>(BodySite::kRightFoot)].position =
+      glm::vec3(0.1f, 0.08f, 0.05f);
+  const std::string path = test::scratchDir() + "/feet.vrec";
+  SimRandom rng(5);
+  std::vector<SensorFrame> frames;
+  {
+    auto writer = RecordingWriter::create(path, header);
+    ASSERT_TRUE(writer.ok()) << writer.error().message;
+    for (std::uint64_t i = 0; i < 10; ++i) {
+      frames.push_back(randomFrame(rng, i, kBodySiteCount));
+      ASSERT_TRUE((*writer)->append(frames.back()).ok());
+    }
+  }
+  auto bytes = readFileBytes(path);
+  ASSERT_TRUE(bytes.ok());
+  std::uint32_t version = 0;
+  std::memcpy(&version, bytes->data() + 8, 4);
+  EXPECT_EQ(version, 2u);
+  auto rec = loadRecording(path);
+  ASSERT_TRUE(rec.ok()) << rec.error().message;
+  EXPECT_TRUE(rec->complete) << rec->stop_reason;
+  ASSERT_EQ(rec->header.stations.size(), 6u);
+  EXPECT_EQ(rec->header.stations[5].site, BodySite::kRightFoot);
+  ASSERT_TRUE(rec->header.calibration.has_value());
+  EXPECT_EQ(rec->header.calibration->stations[5].position, glm::vec3(0.1f, 0.08f, 0.05f));
+  ASSERT_EQ(rec->frames.size(), frames.size());
+  for (std::size_t i = 0; i < frames.size(); ++i) expectFrameEq(rec->frames[i], frames[i]);
+  // A damaged six-station file resynchronises on its own record size.
+  std::vector<std::uint8_t> damaged = *bytes;
+  damaged[damaged.size() / 2] ^= 0x5a;
+  auto partial = decodeRecording(damaged, "feet.vrec");
+  ASSERT_TRUE(partial.ok()) << partial.error().message;
+  EXPECT_FALSE(partial->complete);
+  EXPECT_EQ(partial->frames.size(), frames.size() - 1);
+  // A version 1 file cannot name a foot station.
+  std::vector<std::uint8_t> v1;
+  encodeRecordingFileHeader(v1);
+  encodeHeaderRecord(header, v1);  // version 1 leaves the feet out of the map
+  auto back = decodeRecording(v1, "v1.vrec");
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(back->header.stations.size(), 4u);
+  // An unknown version fails clearly.
+  std::vector<std::uint8_t> v3;
+  encodeRecordingFileHeader(v3, 3);
+  auto bad = decodeRecording(v3, "v3.vrec");
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().message.find("version 3"), std::string::npos) << bad.error().message;
 }
 
 }  // namespace

@@ -35,6 +35,29 @@ TEST(SensorConfig, ShippedFilesParse) {
   EXPECT_NEAR(sim->sim.position_noise_m, 0.0008f, 1e-9f);
   EXPECT_GT(sim->sim.hold_s, sim->calibration.window_s);
 
+  // Six sensors: a HID tracker with foot stations, and the simulated rig with them.
+  auto feet = loadSensorSetup("config/sensors/hid_feet.toml");
+  ASSERT_TRUE(feet.ok()) << feet.error().message;
+  EXPECT_EQ(feet->tracker_kind, TrackerKind::kHid);
+  ASSERT_EQ(feet->hid.stations.size(), 6u);
+  EXPECT_EQ(feet->hid.stations[4].site, BodySite::kLeftFoot);
+  EXPECT_EQ(feet->hid.stations[5].site, BodySite::kRightFoot);
+  ASSERT_EQ(feet->tracker.stations.size(), 6u);
+  EXPECT_EQ(feet->mounts[static_cast<std::size_t>(BodySite::kRightFoot)].offset,
+            glm::vec3(0.0f, 0.0f, 0.07f));
+  EXPECT_FLOAT_EQ(
+      feet->solver.station_filters[static_cast<std::size_t>(BodySite::kLeftFoot)].position_beta,
+      10.0f);
+  EXPECT_TRUE(feet->sim.foot_trackers);
+  EXPECT_FALSE(sim->sim.foot_trackers);
+  auto sim_feet = loadSensorSetup("config/sensors/sim_feet.toml");
+  ASSERT_TRUE(sim_feet.ok()) << sim_feet.error().message;
+  EXPECT_TRUE(sim_feet->sim.foot_trackers);
+  EXPECT_DOUBLE_EQ(sim_feet->sim.rate_hz, 240.0);
+  EXPECT_EQ(sim_feet->sim.mounts[static_cast<std::size_t>(BodySite::kLeftFoot)].site,
+            BodySite::kLeftFoot);
+  EXPECT_FALSE(fastrak->sim.foot_trackers);
+
   auto hid = loadSensorSetup("config/sensors/hid.toml");
   ASSERT_TRUE(hid.ok()) << hid.error().message;
   EXPECT_EQ(hid->tracker_kind, TrackerKind::kHid);
@@ -89,6 +112,16 @@ TEST(SensorConfig, MistakesNameTheKeyAndTheReason) {
   expectError("[hid]\nreport_size = 8\n[[hid.station]]\nsite = \"head\"\nposition_offset = 4\n",
               "reach past the 8-byte report");
   expectError("participant = \n", "bad.toml:1");
+  // Foot stations: optional, but a FASTRAK has four receivers, and a HID tracker still needs
+  // the four upper-body sites.
+  expectError(std::string("[tracker]\nkind = \"fastrak\"\n") + kStations +
+                  "[[station]]\nnumber = 0\nsite = \"left_foot\"\n",
+              "a FASTRAK has 4 receivers");
+  expectError(
+      "[tracker]\nkind = \"hid\"\n[[hid.station]]\nsite = \"head\"\n[[hid.station]]\n"
+      "site = \"left_foot\"\n",
+      "0 stations laid out at 'chest'");
+  expectError("[[station]]\nnumber = 0\nsite = \"left_ankle\"\n", "station.site");
   EXPECT_FALSE(parseGloveConfig("sensors = 20\n", "g.toml").ok());
   EXPECT_FALSE(loadSensorSetup("config/sensors/no-such-file.toml").ok());
 }

@@ -116,7 +116,7 @@ hips_cutoff_hz = 0.0
 )",
                                 "inline");
   ASSERT_TRUE(setup.ok()) << setup.error().message;
-  for (std::size_t s = 0; s < kBodySiteCount; ++s) {
+  for (std::size_t s = 0; s < kUpperBodySiteCount; ++s) {  // (the feet have their own keys)
     const StationFilterParams& f = setup->solver.station_filters[s];
     EXPECT_FLOAT_EQ(f.position_noise_m, 0.002f);
     EXPECT_FLOAT_EQ(f.orientation_noise_deg, 0.5f);
