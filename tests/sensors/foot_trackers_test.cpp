@@ -22,25 +22,7 @@
 namespace vistel {
 namespace {
 
-struct Rig {
-  Skeleton skeleton;
-  JointRoles roles{};
-  Posture calibration;
-  std::array<AttachedSensor, kBodySiteCount> sensors{};
-};
-
-Rig makeRig() {
-  Rig rig;
-  rig.skeleton = test::makeHumanoid(true);  // scrambled joint frames, as mocap skeletons have
-  auto roles = resolveJointRoles(rig.skeleton, nullptr);
-  EXPECT_TRUE(roles.ok());
-  rig.roles = *roles;
-  rig.calibration = standardCalibrationPosture(rig.skeleton, rig.roles);
-  std::vector<glm::mat4> model(static_cast<std::size_t>(rig.skeleton.jointCount()));
-  poseSkeleton(rig.skeleton, rig.calibration, model);
-  rig.sensors = attachSensors(rig.roles, model, defaultSensorMounts());
-  return rig;
-}
+using test::Rig;
 
 PostureSolver makeSolver(const Rig& rig, bool feet, SolverOptions options = {}) {
   options.filter = false;
@@ -57,7 +39,7 @@ PostureSolver makeSolver(const Rig& rig, bool feet, SolverOptions options = {}) 
 }
 
 TEST(FootTrackers, FootStationsAreOptionalAndNeverHeldWhenNotWorn) {
-  const Rig rig = makeRig();
+  const Rig rig = test::makeRig(true);
   PostureSolver four = makeSolver(rig, false);
   EXPECT_FALSE(four.footTracked(0));
   EXPECT_FALSE(four.footTracked(1));
@@ -88,7 +70,7 @@ TEST(FootTrackers, FootStationsAreOptionalAndNeverHeldWhenNotWorn) {
 }
 
 TEST(FootTrackers, TrackedLegsFollowSittingAndSteppingExactly) {
-  const Rig rig = makeRig();
+  const Rig rig = test::makeRig(true);
   PostureSolver six = makeSolver(rig, true);
   PostureSolver four = makeSolver(rig, false);
   const glm::vec3 left(1, 0, 0);  // the humanoid faces +Z, its left is +X
@@ -147,7 +129,7 @@ TEST(FootTrackers, TrackedLegsFollowSittingAndSteppingExactly) {
 }
 
 TEST(FootTrackers, SimulatorSharesTheRateAmongTheWornStations) {
-  const Rig rig = makeRig();
+  const Rig rig = test::makeRig(true);
   const Posture still = rig.calibration;
   for (bool feet : {false, true}) {
     SimOptions o = noiselessSimOptions();
@@ -293,26 +275,7 @@ TEST(FootTrackers, SixStationSessionRecordsAndReplays) {
   ASSERT_TRUE(rec.ok()) << rec.error().message;
   ASSERT_EQ(rec->frames.size(), frames);
   EXPECT_TRUE(rec->frames.back().station(BodySite::kRightFoot).valid);
-  PostureSourceOptions replay_options;
-  replay_options.realtime = false;
-  auto replay = openPostureSource(recording, avatar, replay_options);
-  ASSERT_TRUE(replay.ok()) << replay.error().message;
-  std::vector<Posture> replayed;
-  std::size_t replay_first_calibrated = 0;
-  while ((*replay)->poll(0.1, p).isFrame()) {
-    replayed.push_back(p);
-    if ((*replay)->calibrated() && replay_first_calibrated == 0)
-      replay_first_calibrated = replayed.size();
-  }
-  ASSERT_EQ(replayed.size(), frames);
-  EXPECT_EQ(replay_first_calibrated, first_calibrated);
-  float worst = 0.0f;
-  for (std::size_t i = first_calibrated - 1; i < frames; ++i) {
-    const auto a = test::jointPositions(avatar, replayed[i]);
-    const auto b = test::jointPositions(avatar, after_calibration[i - (first_calibrated - 1)]);
-    for (std::size_t j = 0; j < a.size(); ++j) worst = std::max(worst, glm::distance(a[j], b[j]));
-  }
-  EXPECT_LT(worst, 1e-4f);
+  test::expectReplayMatches(recording, avatar, after_calibration, first_calibrated, frames);
 }
 
 // A bit-exact check (run by hand: --gtest_also_run_disabled_tests): the FNV-1a hash of every

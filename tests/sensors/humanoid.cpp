@@ -4,6 +4,10 @@
 #include <map>
 #include <string>
 
+#include <gtest/gtest.h>
+
+#include "common/sensors/calibration.hpp"
+#include "common/sensors/io/posture_source.hpp"
 #include "common/sensors/random.hpp"
 #include "common/sensors/rotation_utils.hpp"
 
@@ -113,6 +117,48 @@ SensorFrame exactFrame(const Skeleton& skeleton, const Posture& posture,
     r.valid = true;
   }
   return f;
+}
+
+Rig makeRig(bool scrambled_frames) {
+  Rig rig;
+  rig.skeleton = makeHumanoid(scrambled_frames);
+  auto roles = resolveJointRoles(rig.skeleton, nullptr);
+  EXPECT_TRUE(roles.ok()) << (roles.ok() ? "" : roles.error().message);
+  if (roles.ok()) rig.roles = *roles;
+  rig.calibration = standardCalibrationPosture(rig.skeleton, rig.roles);
+  std::vector<glm::mat4> model(static_cast<std::size_t>(rig.skeleton.jointCount()));
+  poseSkeleton(rig.skeleton, rig.calibration, model);
+  rig.sensors = attachSensors(rig.roles, model, defaultSensorMounts());
+  return rig;
+}
+
+void expectReplayMatches(const std::string& recording, const Skeleton& avatar,
+                         std::span<const Posture> after_calibration, std::size_t first_calibrated,
+                         std::size_t frames) {
+  PostureSourceOptions replay_options;
+  replay_options.realtime = false;
+  auto replay = openPostureSource(recording, avatar, replay_options);
+  ASSERT_TRUE(replay.ok()) << replay.error().message;
+  std::vector<Posture> replayed;
+  std::size_t replay_first_calibrated = 0;
+  Posture p;
+  PollResult r;
+  while ((r = (*replay)->poll(0.1, p)).isFrame()) {
+    replayed.push_back(p);
+    if ((*replay)->calibrated() && replay_first_calibrated == 0)
+      replay_first_calibrated = replayed.size();
+  }
+  EXPECT_EQ(r.status, PollStatus::kEnd) << r.message;
+  ASSERT_EQ(replayed.size(), frames);
+  EXPECT_EQ(replay_first_calibrated, first_calibrated);
+  ASSERT_GT(first_calibrated, 0u);
+  float worst = 0.0f;
+  for (std::size_t i = first_calibrated - 1; i < frames; ++i) {
+    const auto a = jointPositions(avatar, replayed[i]);
+    const auto b = jointPositions(avatar, after_calibration[i - (first_calibrated - 1)]);
+    for (std::size_t j = 0; j < a.size(); ++j) worst = std::max(worst, glm::distance(a[j], b[j]));
+  }
+  EXPECT_LT(worst, 1e-4f);
 }
 
 }  // namespace vistel::test

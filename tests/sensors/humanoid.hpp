@@ -3,8 +3,10 @@
 // same joint positions), as mocap skeletons have.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -33,5 +35,22 @@ float angleDegrees(const glm::quat& a, const glm::quat& b);
 // four upper-body ones; the feet too when `feet`).
 SensorFrame exactFrame(const Skeleton& skeleton, const Posture& posture,
                        std::span<const AttachedSensor> sensors, double time, bool feet = false);
+
+// The humanoid in the standard calibration posture with the default sensor mounts attached:
+// what a posture-solver test solves from.
+struct Rig {
+  Skeleton skeleton;
+  JointRoles roles{};
+  Posture calibration;
+  std::array<AttachedSensor, kBodySiteCount> sensors{};
+};
+Rig makeRig(bool scrambled_frames);
+
+// Replays a .vrec (not in real time) on `avatar` and expects what a live session solved:
+// calibration at the same frame (first_calibrated, 1-based), then the same postures
+// (`after_calibration`, from that frame on) within 0.1 mm at every joint, `frames` in all.
+void expectReplayMatches(const std::string& recording, const Skeleton& avatar,
+                         std::span<const Posture> after_calibration, std::size_t first_calibrated,
+                         std::size_t frames);
 
 }  // namespace vistel::test

@@ -21,25 +21,7 @@
 namespace vistel {
 namespace {
 
-struct Rig {
-  Skeleton skeleton;
-  JointRoles roles{};
-  Posture calibration;
-  std::array<AttachedSensor, kBodySiteCount> sensors{};
-};
-
-Rig makeRig(bool scrambled) {
-  Rig rig;
-  rig.skeleton = test::makeHumanoid(scrambled);
-  auto roles = resolveJointRoles(rig.skeleton, nullptr);
-  EXPECT_TRUE(roles.ok()) << (roles.ok() ? "" : roles.error().message);
-  rig.roles = *roles;
-  rig.calibration = standardCalibrationPosture(rig.skeleton, rig.roles);
-  std::vector<glm::mat4> model(static_cast<std::size_t>(rig.skeleton.jointCount()));
-  poseSkeleton(rig.skeleton, rig.calibration, model);
-  rig.sensors = attachSensors(rig.roles, model, defaultSensorMounts());
-  return rig;
-}
+using test::Rig;
 
 PostureSolver makeSolver(const Rig& rig, SolverOptions options,
                          const CalibrationOptions& copt = {}) {
@@ -117,7 +99,7 @@ void expectArmsExact(const Rig& rig, const Posture& truth, const Posture& solved
 class SolverExact : public ::testing::TestWithParam<bool> {};
 
 TEST_P(SolverExact, RecoversArmPosturesFromNoiselessSensors) {
-  const Rig rig = makeRig(GetParam());
+  const Rig rig = test::makeRig(GetParam());
   PostureSolver solver = makeSolver(rig, exactOptions());
   SimRandom rng(3);
   Posture solved;
@@ -142,7 +124,7 @@ TEST_P(SolverExact, RecoversArmPosturesFromNoiselessSensors) {
 }
 
 TEST_P(SolverExact, ThroughTheSimulator) {
-  const Rig rig = makeRig(GetParam());
+  const Rig rig = test::makeRig(GetParam());
   // A moving body: both arms swing and bend, the whole body walks and turns.
   const PostureSampler sampler = [&rig](double t, Posture& out) {
     out = rig.calibration;
@@ -195,7 +177,7 @@ INSTANTIATE_TEST_SUITE_P(Skeletons, SolverExact, ::testing::Values(false, true),
                          });
 
 TEST(Calibration, FindsTheMountsAndFailsWithoutAStation) {
-  const Rig rig = makeRig(true);
+  const Rig rig = test::makeRig(true);
   std::vector<SensorFrame> frames = {
       test::exactFrame(rig.skeleton, rig.calibration, rig.sensors, 0.0)};
   auto cal = calibrateBody(rig.skeleton, rig.roles, rig.calibration, frames, {});
@@ -218,7 +200,7 @@ TEST(Calibration, FindsTheMountsAndFailsWithoutAStation) {
 }
 
 TEST(Calibration, EstimatesProportionsAndFacing) {
-  const Rig rig = makeRig(false);
+  const Rig rig = test::makeRig(false);
   // A participant 10 % larger in every bone, standing 2 m away, turned 90 degrees.
   Skeleton big = rig.skeleton;
   for (std::size_t j = 1; j < big.rest_local.size(); ++j) big.rest_local[j].translation *= 1.1f;
@@ -341,7 +323,7 @@ float worstError(const Rig& rig, const Run& run, double from, double to) {
 // without the dropout, and is back to the undisturbed accuracy 0.5 s after the station
 // returns.
 void checkDropout(BodySite site) {
-  const Rig rig = makeRig(false);
+  const Rig rig = test::makeRig(false);
   const Run base = runMoving(rig, {}, site);
   const Run drop = runMoving(rig, {{site, 1.3, 0.5}}, site);
   ASSERT_EQ(base.solved.size(), drop.solved.size());
@@ -376,7 +358,7 @@ TEST(SolverDropout, ChestStationOutForHalfASecond) { checkDropout(BodySite::kChe
 TEST(SolverDropout, HeadStationOutForHalfASecond) { checkDropout(BodySite::kHead); }
 
 TEST(Solver, ClavicleLiftsWhenTheHandRisesHigh) {
-  const Rig rig = makeRig(false);
+  const Rig rig = test::makeRig(false);
   PostureSolver solver = makeSolver(rig, exactOptions());
   float last_lift = -1.0f;
   const int clav = rig.roles[Role::kLClavicle];
@@ -401,7 +383,7 @@ TEST(Solver, ClavicleLiftsWhenTheHandRisesHigh) {
 }
 
 TEST(Solver, GlovesCurlTheFingersTowardThePalm) {
-  const Rig rig = makeRig(true);
+  const Rig rig = test::makeRig(true);
   PostureSolver solver = makeSolver(rig, exactOptions());
   SensorFrame frame = test::exactFrame(rig.skeleton, rig.calibration, rig.sensors, 1.0);
   Posture open, fist;
@@ -438,7 +420,7 @@ TEST(Solver, GlovesCurlTheFingersTowardThePalm) {
 }
 
 TEST(Solver, GloveWristAnglesTurnTheHandAsTheSimulatorReadsThem) {
-  const Rig rig = makeRig(true);
+  const Rig rig = test::makeRig(true);
   PostureSolver solver = makeSolver(rig, exactOptions());
   SimRandom rng(4);
   for (int k = 0; k < 20; ++k) {
@@ -473,7 +455,7 @@ TEST(Solver, GloveWristAnglesTurnTheHandAsTheSimulatorReadsThem) {
 }
 
 TEST(Solver, StandingFeetStayOnTheFloorAndSeatedThighsAreLevel) {
-  const Rig rig = makeRig(false);
+  const Rig rig = test::makeRig(false);
   // Crouch: the whole body 20 cm lower.
   Posture crouch = rig.calibration;
   crouch.root_translation.y -= 0.2f;
@@ -504,7 +486,7 @@ TEST(Solver, StandingFeetStayOnTheFloorAndSeatedThighsAreLevel) {
 }
 
 TEST(Solver, AllocatesNothingPerFrame) {
-  const Rig rig = makeRig(false);
+  const Rig rig = test::makeRig(false);
   PostureSolver solver = makeSolver(rig, SolverOptions{});
   std::vector<SensorFrame> frames;
   for (int k = 0; k < 50; ++k) {

@@ -66,30 +66,9 @@ TEST(PostureSource, ReplayMatchesLiveExactly) {
     }
   }
   (*live)->stopRecording();
-  PostureSourceOptions replay_options;
-  replay_options.realtime = false;
-  auto replay = openPostureSource(recording, avatar, replay_options);
-  ASSERT_TRUE(replay.ok()) << replay.error().message;
   // The replay calibrates where the live session did (the calibration record's place in the
   // stream) and then solves the same frames: the same postures.
-  std::vector<Posture> replayed;
-  std::size_t replay_first_calibrated = 0;
-  PollResult r;
-  while ((r = (*replay)->poll(0.1, p)).isFrame()) {
-    replayed.push_back(p);
-    if ((*replay)->calibrated() && replay_first_calibrated == 0)
-      replay_first_calibrated = replayed.size();
-  }
-  EXPECT_EQ(r.status, PollStatus::kEnd) << r.message;
-  ASSERT_EQ(replayed.size(), frames);
-  EXPECT_EQ(replay_first_calibrated, first_calibrated);
-  float worst = 0.0f;
-  for (std::size_t i = first_calibrated - 1; i < frames; ++i) {
-    const auto a = test::jointPositions(avatar, replayed[i]);
-    const auto b = test::jointPositions(avatar, after_calibration[i - (first_calibrated - 1)]);
-    for (std::size_t j = 0; j < a.size(); ++j) worst = std::max(worst, glm::distance(a[j], b[j]));
-  }
-  EXPECT_LT(worst, 1e-4f);
+  test::expectReplayMatches(recording, avatar, after_calibration, first_calibrated, frames);
 }
 
 TEST(PostureSource, BadSpecsFailClearly) {
