@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   vistel::registerBuildCommand(app);
   vistel::registerDeformCommand(app);
   vistel::registerCompareCommand(app);
+  vistel::registerCutCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -30,6 +30,8 @@ void registerBuildCommand(CLI::App& app);
 void registerDeformCommand(CLI::App& app);
 // vistel-avatar compare A B [--json] [--weld M] [--samples N]
 void registerCompareCommand(CLI::App& app);
+// vistel-avatar cut AVATAR [--band M] -o DIR [--format obj|ply] [--config DIR]
+void registerCutCommand(CLI::App& app);
 
 // Fits `avatar`'s implicit model (build_command.cpp; shared with deform): the joint map that
 // fits its skeleton from <config>/skeletons, the primitive map from `primitives`. progress
