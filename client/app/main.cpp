@@ -87,6 +87,7 @@
 #include "client/net/tls_options.hpp"
 #include "client/record/session_sampling.hpp"
 #include "client/view/room_view.hpp"
+#include "client/voice/voice_cli.hpp"
 #include "client/voice/voice_engine.hpp"
 #include "client/voice/voice_scene.hpp"
 #include "common/avatar/avatar_io.hpp"
@@ -291,12 +292,8 @@ int main(int argc, char** argv) {
                  "speak this audio file (WAV) instead of the microphone");
   app.add_option("--audio-out", voice_options.audio_out,
                  "write what is heard to this WAV file (stereo, 48 kHz) instead of the speakers");
-  int voice_kbps = 16;
-  app.add_option("--voice-kbps", voice_kbps,
-                 "Opus bitrate of the own voice, 16..32 kbit/s (default 16)")
-      ->check(CLI::Range(16, 32));
-  app.add_flag("--mute", voice_options.muted, "start with the own voice muted (M toggles)");
-  app.add_flag("--no-audio", no_audio, "no voice at all: nothing captured, sent or played");
+  addSharedVoiceOptions(app, voice_options, no_audio, "start with the own voice muted (M toggles)",
+                        "no voice at all: nothing captured, sent or played");
   bool no_echo_cancel = false;
   app.add_flag("--no-echo-cancel", no_echo_cancel,
                "keep what the speakers play in the microphone's capture (headphones)");
@@ -470,7 +467,6 @@ int main(int argc, char** argv) {
   auto work = asio::make_work_guard(io);
   auto driver = NetDriver::create(io, *server, settings, cache, {}, tls_settings);
   driver->setNetSim(*netsim);
-  voice_options.opus.bitrate_bps = 1000 * voice_kbps;
   voice_options.echo_cancel = !no_echo_cancel;
   // Voice: its own thread on a 20 ms grid (client/voice).
   std::unique_ptr<VoiceEngine> voice;

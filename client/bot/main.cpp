@@ -58,6 +58,7 @@
 #include "client/net/net_driver.hpp"
 #include "client/net/playback_stats.hpp"
 #include "client/net/tls_options.hpp"
+#include "client/voice/voice_cli.hpp"
 #include "client/voice/voice_engine.hpp"
 #include "client/voice/voice_scene.hpp"
 #include "common/avatar/avatar_io.hpp"
@@ -112,12 +113,8 @@ int main(int argc, char** argv) {
                  "audio file (WAV) every participant speaks once live (endlessly with --loop)");
   app.add_option("--audio-out", voice_options.audio_out,
                  "write what the first participant hears to this WAV file (stereo, 48 kHz)");
-  int voice_kbps = 16;
-  app.add_option("--voice-kbps", voice_kbps,
-                 "Opus bitrate of the own voice, 16..32 kbit/s (default 16)")
-      ->check(CLI::Range(16, 32));
-  app.add_flag("--mute", voice_options.muted, "join with the voice muted");
-  app.add_flag("--no-audio", no_audio, "no voice at all");
+  addSharedVoiceOptions(app, voice_options, no_audio, "join with the voice muted",
+                        "no voice at all");
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error, off (default: info)");
   std::string netsim_text;
@@ -247,7 +244,6 @@ int main(int argc, char** argv) {
     drivers.push_back(NetDriver::create(io, *server, settings, nullptr, {}, tls_settings));
     drivers.back()->setNetSim(*netsim);
   }
-  voice_options.opus.bitrate_bps = 1000 * voice_kbps;
   // Voice: an engine per speaking participant (and for the first one's ears with
   // --audio-out); files only, never devices.
   std::vector<std::unique_ptr<VoiceEngine>> voices(drivers.size());

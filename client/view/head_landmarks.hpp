@@ -8,12 +8,6 @@
 
 namespace vistel {
 
-// The head joint: a joint named exactly "head" (vistel's canonical name), else one
-// named "head" in any case, else the first whose name contains "head" (any case) and
-// is not an end site ("end", "top", "nub"), else the joint highest (+Y) at rest.
-// -1 only for an empty skeleton.
-int findHeadJoint(const Skeleton& skeleton);
-
 struct HeadLandmarks {
   int joint = -1;              // head joint index
   glm::mat4 rest_model{1.0f};  // the head joint's rest transform, model space

@@ -1,20 +1,12 @@
 #include "client/voice/head_pose.hpp"
 
 #include <algorithm>
-#include <cctype>
 #include <string>
 
 #include <glm/gtc/quaternion.hpp>
 
 namespace vistel {
 namespace {
-
-std::string lower(std::string_view text) {
-  std::string out(text);
-  std::transform(out.begin(), out.end(), out.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return out;
-}
 
 // The rotation part of a transform with scale taken out.
 glm::quat rotationOf(const glm::mat4& m) {
@@ -28,27 +20,7 @@ glm::quat rotationOf(const glm::mat4& m) {
 
 }  // namespace
 
-int voiceHeadJoint(const Skeleton& skeleton) {
-  const int n = skeleton.jointCount();
-  if (n == 0) return -1;
-  for (int j = 0; j < n; ++j) {
-    if (lower(skeleton.names[static_cast<std::size_t>(j)]) == "head") return j;
-  }
-  for (int j = 0; j < n; ++j) {
-    if (lower(skeleton.names[static_cast<std::size_t>(j)]).find("head") != std::string::npos) {
-      return j;
-    }
-  }
-  const std::vector<glm::mat4> rest = restModelTransforms(skeleton);
-  int best = 0;
-  for (int j = 1; j < n; ++j) {
-    if (rest[static_cast<std::size_t>(j)][3].y > rest[static_cast<std::size_t>(best)][3].y)
-      best = j;
-  }
-  return best;
-}
-
-HeadPoser::HeadPoser(const Skeleton& skeleton) : head_(voiceHeadJoint(skeleton)) {
+HeadPoser::HeadPoser(const Skeleton& skeleton) : head_(findHeadJoint(skeleton)) {
   if (head_ < 0) return;
   const std::vector<glm::mat4> rest = restModelTransforms(skeleton);
   const glm::mat4& m = rest[static_cast<std::size_t>(head_)];

@@ -19,10 +19,6 @@
 
 namespace vistel {
 
-// The head joint: a joint named "head" (any case), else the first whose name contains
-// "head" (any case), else the joint highest at rest; -1 for an empty skeleton.
-int voiceHeadJoint(const Skeleton& skeleton);
-
 class HeadPoser {
  public:
   explicit HeadPoser(const Skeleton& skeleton);

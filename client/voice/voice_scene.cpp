@@ -71,7 +71,7 @@ float applyVoiceToPosture(const Skeleton& skeleton, float opening, Posture& post
   // opening), a negative one lifts the chin.
   float angle = kJawOpenRad * opening;
   if (joint < 0) {
-    joint = voiceHeadJoint(skeleton);
+    joint = findHeadJoint(skeleton);
     angle = -kChinLiftRad * opening;
   }
   if (joint < 0) return 0.0f;

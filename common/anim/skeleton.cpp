@@ -1,6 +1,8 @@
 #include "common/anim/skeleton.hpp"
 
+#include <cctype>
 #include <cmath>
+#include <string>
 #include <unordered_set>
 
 namespace vistel {
@@ -14,6 +16,12 @@ bool finite(const Transform& t) {
     if (!std::isfinite(t.rotation[i])) return false;
   }
   return true;
+}
+
+std::string lowered(const std::string& s) {
+  std::string out = s;
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
 }
 
 }  // namespace
@@ -69,6 +77,31 @@ void computeInverseBind(Skeleton& s) {
   const std::vector<glm::mat4> model = restModelTransforms(s);
   s.inverse_bind.resize(model.size());
   for (std::size_t j = 0; j < model.size(); ++j) s.inverse_bind[j] = glm::inverse(model[j]);
+}
+
+int findHeadJoint(const Skeleton& skeleton) {
+  const int n = skeleton.jointCount();
+  if (n == 0) return -1;
+  // Exact canonical name, then any case, then a name containing "head".
+  if (const int j = skeleton.find("head"); j >= 0) return j;
+  for (int j = 0; j < n; ++j) {
+    if (lowered(skeleton.names[static_cast<std::size_t>(j)]) == "head") return j;
+  }
+  for (int j = 0; j < n; ++j) {
+    const std::string name = lowered(skeleton.names[static_cast<std::size_t>(j)]);
+    const bool end_site = name.find("end") != std::string::npos ||
+                          name.find("top") != std::string::npos ||
+                          name.find("nub") != std::string::npos;
+    if (name.find("head") != std::string::npos && !end_site) return j;
+  }
+  // The topmost joint at rest.
+  const std::vector<glm::mat4> rest = restModelTransforms(skeleton);
+  int best = 0;
+  for (int j = 1; j < n; ++j) {
+    if (rest[static_cast<std::size_t>(j)][3].y > rest[static_cast<std::size_t>(best)][3].y)
+      best = j;
+  }
+  return best;
 }
 
 }  // namespace vistel

@@ -38,6 +38,12 @@ Status validateSkeleton(const Skeleton& skeleton);
 // Model-space rest transforms (njoint), from rest_local.
 std::vector<glm::mat4> restModelTransforms(const Skeleton& skeleton);
 
+// The head joint: a joint named exactly "head" (vistel's canonical name), else one named
+// "head" in any case, else the first whose name contains "head" (any case) and is not an
+// end site ("end", "top", "nub"), else the joint highest (+Y) at rest. -1 only for an empty
+// skeleton.
+int findHeadJoint(const Skeleton& skeleton);
+
 // Sets inverse_bind from rest_local (the bind posture is the rest posture).
 void computeInverseBind(Skeleton& skeleton);
 

@@ -312,10 +312,8 @@ Result<std::vector<std::uint8_t>> encodeGlb(const GltfScene& scene) {
     primitives.push_back(std::move(prim));
   }
   mesh_json["primitives"] = std::move(primitives);
-  json materials = json::array();
-  json textures = json::array();
-  json images = json::array();
-  appendLook(scene.look, b, materials, textures, images);
+  GltfLooks looks;
+  looks.append(scene.look, b);
 
   // The document.
   nodes.insert(nodes.begin(), mesh_node);
@@ -332,12 +330,7 @@ Result<std::vector<std::uint8_t>> encodeGlb(const GltfScene& scene) {
               {"bufferViews", b.views()},
               {"buffers", json::array({{{"byteLength", b.bin().size()}}})}};
   if (!skins.empty()) doc["skins"] = skins;
-  if (!materials.empty()) doc["materials"] = materials;
-  if (!textures.empty()) {
-    doc["textures"] = textures;
-    doc["images"] = images;
-    doc["samplers"] = lookSamplers();
-  }
+  looks.writeTo(doc);
   if (!animations.empty()) doc["animations"] = animations;
   return assembleGlb(doc.dump(), b.bin());
 }
@@ -404,9 +397,8 @@ void keepLargestInfluences(GltfSkin& skin, int k) {
   skin.weights = std::move(weights);
 }
 
-int appendLook(const AvatarLook& look, GlbBuilder& b, json& materials, json& textures,
-               json& images) {
-  const int first_material = static_cast<int>(materials.size());
+int GltfLooks::append(const AvatarLook& look, GlbBuilder& b) {
+  const int first_material = static_cast<int>(materials_.size());
   const bool with_uvs = !look.uvs.empty();
   std::vector<int> texture_of(look.textures.size(), -1);
   auto textureIndex = [&](int t) {
@@ -416,9 +408,9 @@ int appendLook(const AvatarLook& look, GlbBuilder& b, json& materials, json& tex
     const int view = b.addView(tex.encoded.data(), tex.encoded.size(), 0);
     json image = {{"bufferView", view}, {"mimeType", tex.mime}};
     if (!tex.name.empty()) image["name"] = tex.name;
-    images.push_back(std::move(image));
-    textures.push_back({{"sampler", 0}, {"source", images.size() - 1}});
-    slot = static_cast<int>(textures.size()) - 1;
+    images_.push_back(std::move(image));
+    textures_.push_back({{"sampler", 0}, {"source", images_.size() - 1}});
+    slot = static_cast<int>(textures_.size()) - 1;
     return slot;
   };
   for (const AvatarMaterial& m : look.materials) {
@@ -442,15 +434,19 @@ int appendLook(const AvatarLook& look, GlbBuilder& b, json& materials, json& tex
       mat["alphaMode"] = "BLEND";
     }
     if (m.double_sided) mat["doubleSided"] = true;
-    materials.push_back(std::move(mat));
+    materials_.push_back(std::move(mat));
   }
   return first_material;
 }
 
-nlohmann::json lookSamplers() {
+void GltfLooks::writeTo(json& doc) const {
+  if (!materials_.empty()) doc["materials"] = materials_;
+  if (textures_.empty()) return;
+  doc["textures"] = textures_;
+  doc["images"] = images_;
   // Linear magnification, trilinear minification, repeat (glTF's defaults, said).
-  return json::array(
-      {{{"magFilter", 9729}, {"minFilter", 9987}, {"wrapS", 10497}, {"wrapT", 10497}}});
+  doc["samplers"] =
+      json::array({{{"magFilter", 9729}, {"minFilter", 9987}, {"wrapS", 10497}, {"wrapT", 10497}}});
 }
 
 }  // namespace vistel

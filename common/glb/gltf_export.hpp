@@ -91,16 +91,24 @@ GltfScene posedAvatarScene(const AvatarModel& avatar, std::span<const glm::mat4>
 // The avatar in its rest posture (its prototype skin and rest skeleton).
 GltfScene restAvatarScene(const AvatarModel& avatar);
 
-// Appends a look to a document being built with `b`: its materials, and the textures and
-// images they use (each image's bytes a buffer view of b; every texture uses sampler 0, see
-// lookSamplers). Returns the index in `materials` of the look's first material: a submesh
-// with material m uses first + m. Without texture coordinates the materials are written
-// without textures (a textured primitive needs TEXCOORD_0).
-int appendLook(const AvatarLook& look, GlbBuilder& b, nlohmann::json& materials,
-               nlohmann::json& textures, nlohmann::json& images);
+// The looks of a document being built: materials, and the textures and images they use.
+class GltfLooks {
+ public:
+  // Appends a look, its images' bytes as buffer views of `b`; returns the index of the
+  // look's first material (a submesh with material m uses first + m). Without texture
+  // coordinates the materials are written without textures (a textured primitive needs
+  // TEXCOORD_0).
+  int append(const AvatarLook& look, GlbBuilder& b);
 
-// The one sampler appendLook's textures use (the document's "samplers").
-nlohmann::json lookSamplers();
+  // Puts what was appended into the document: "materials", and "textures", "images" and
+  // their one sampler when there are textures. Nothing when nothing was appended.
+  void writeTo(nlohmann::json& doc) const;
+
+ private:
+  nlohmann::json materials_ = nlohmann::json::array();
+  nlohmann::json textures_ = nlohmann::json::array();
+  nlohmann::json images_ = nlohmann::json::array();
+};
 
 // Keeps each vertex's `k` largest influences (1..4), renormalised, for viewers that read
 // JOINTS_0/WEIGHTS_0 alone (three.js). A skin with k or fewer is left as it is.

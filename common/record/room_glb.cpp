@@ -160,7 +160,7 @@ class RoomDocument {
             std::span<const float>(reinterpret_cast<const float*>(look.uvs.data()), nvert * 2), 2,
             "VEC2", kGltfArrayBuffer, false);
       }
-      first_material = appendLook(look, bin_, materials_, textures_, images_);
+      first_material = looks_.append(look, bin_);
     }
     json primitives = json::array();
     for (const AvatarSubmesh& sm : effectiveSubmeshes(look, skin.indices.size())) {
@@ -213,12 +213,7 @@ class RoomDocument {
                 {"scenes", json::array({{{"name", "room"}, {"nodes", roots_}}})},
                 {"nodes", nodes_}};
     if (!meshes_.empty()) doc["meshes"] = meshes_;
-    if (!materials_.empty()) doc["materials"] = materials_;
-    if (!textures_.empty()) {
-      doc["textures"] = textures_;
-      doc["images"] = images_;
-      doc["samplers"] = lookSamplers();
-    }
+    looks_.writeTo(doc);
     if (!skins_.empty()) doc["skins"] = skins_;
     if (!channels_.empty()) {
       doc["animations"] =
@@ -300,9 +295,7 @@ class RoomDocument {
   json nodes_ = json::array();
   json roots_ = json::array();
   json meshes_ = json::array();
-  json materials_ = json::array();  // every avatar's look, appended (appendLook)
-  json textures_ = json::array();
-  json images_ = json::array();
+  GltfLooks looks_;  // every avatar's look, appended once per model
   json skins_ = json::array();
   json samplers_ = json::array();
   json channels_ = json::array();

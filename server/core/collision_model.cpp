@@ -1,41 +1,11 @@
 #include "server/core/collision_model.hpp"
 
 #include <algorithm>
-#include <cctype>
 #include <string>
 
 #include "common/anim/posture.hpp"
 
 namespace vistel::server {
-namespace {
-
-std::string lower(std::string_view s) {
-  std::string out(s);
-  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return out;
-}
-
-}  // namespace
-
-int findHeadJoint(const Skeleton& skeleton) {
-  const int n = skeleton.jointCount();
-  for (int j = 0; j < n; ++j) {
-    if (lower(skeleton.names[static_cast<std::size_t>(j)]) == "head") return j;
-  }
-  for (int j = 0; j < n; ++j) {
-    if (lower(skeleton.names[static_cast<std::size_t>(j)]).find("head") != std::string::npos) {
-      return j;
-    }
-  }
-  // The highest joint at rest.
-  const auto rest = restModelTransforms(skeleton);
-  int best = 0;
-  for (int j = 1; j < n; ++j) {
-    if (rest[static_cast<std::size_t>(j)][3].y > rest[static_cast<std::size_t>(best)][3].y)
-      best = j;
-  }
-  return best;
-}
 
 Result<std::shared_ptr<const CollisionModel>> makeCollisionModel(AvatarModel&& avatar,
                                                                  const CollisionLimits& limits,

@@ -36,8 +36,4 @@ Result<std::shared_ptr<const CollisionModel>> makeCollisionModel(AvatarModel&& a
                                                                  const CollisionLimits& limits,
                                                                  std::string_view source);
 
-// The head joint of a skeleton: a joint named "head" (any case), else one whose name
-// contains "head", else the joint highest above the floor in the rest posture.
-int findHeadJoint(const Skeleton& skeleton);
-
 }  // namespace vistel::server

@@ -45,11 +45,11 @@ void expectNear(const glm::vec3& a, const glm::vec3& b, float tolerance = 1e-4f)
 
 TEST(HeadPose, FindsTheHeadJointByNameElseTheHighest) {
   const Skeleton s = skeleton();
-  EXPECT_EQ(voiceHeadJoint(s), 2);  // "Head": any case
+  EXPECT_EQ(findHeadJoint(s), 2);  // "Head": any case
   Skeleton unnamed = s;
   unnamed.names = {"a", "b", "c", "d"};
-  EXPECT_EQ(voiceHeadJoint(unnamed), 2);  // the highest at rest
-  EXPECT_EQ(voiceHeadJoint(Skeleton{}), -1);
+  EXPECT_EQ(findHeadJoint(unnamed), 2);  // the highest at rest
+  EXPECT_EQ(findHeadJoint(Skeleton{}), -1);
 }
 
 TEST(HeadPose, AtRestTheHeadStandsAboveTheSeatFacingWhereTheSeatFaces) {
