@@ -112,4 +112,11 @@ std::string serverAddress(Program& server) {
   return line ? line->substr(std::min(prefix.size(), line->size())) : std::string();
 }
 
+std::string logOf(const std::string& path) {
+  auto text = readFileText(path);
+  return text ? *text : std::string("(no log)");
+}
+
+void sleepFor(double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); }
+
 }  // namespace vistel::test

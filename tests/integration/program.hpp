@@ -41,4 +41,10 @@ class Program {
 // waiting at most 20 s; empty (and a test failure) when it prints something else.
 std::string serverAddress(Program& server);
 
+// A program's log file, or "(no log)" when it cannot be read (for failure messages).
+std::string logOf(const std::string& path);
+
+// Sleeps the calling thread for `s` seconds.
+void sleepFor(double s);
+
 }  // namespace vistel::test

@@ -27,10 +27,7 @@ namespace {
 
 using Child = test::Program;
 
-std::string logOf(const std::string& path) {
-  auto text = readFileText(path);
-  return text ? *text : std::string("(no log)");
-}
+using test::logOf;
 
 class Loopback : public test::SessionScratch {};
 

@@ -29,12 +29,9 @@ namespace {
 
 using Child = test::Program;
 
-std::string logOf(const std::string& path) {
-  auto text = readFileText(path);
-  return text ? *text : std::string("(no log)");
-}
+using test::logOf;
 
-void sleepFor(double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); }
+using test::sleepFor;
 
 // The .glb files in `dir` whose name starts with `room` + "-".
 std::vector<std::string> recordingsOf(const std::string& dir, const std::string& room) {

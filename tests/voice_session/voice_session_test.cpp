@@ -49,10 +49,7 @@ namespace {
 
 using Child = test::Program;
 
-std::string logOf(const std::string& path) {
-  auto text = readFileText(path);
-  return text ? *text : std::string("(no log)");
-}
+using test::logOf;
 
 // The first sample whose 10 ms RMS passes `threshold`, or -1.
 std::ptrdiff_t onset(std::span<const float> x, float threshold) {
@@ -228,45 +225,63 @@ std::vector<float> writeSpeech(const std::string& path) {
   return read ? monoMix(*read) : std::vector<float>{};
 }
 
-class VoiceSession : public test::SessionScratch {};
+class VoiceSession : public test::SessionScratch {
+ protected:
+  // A server, the speech a bot will say (said_path_, reference_) and a muted listening
+  // client ("ears", 6 s) that writes what it hears (heard_path_) and its stats
+  // (stats_path_), through its UDP handshake.
+  void startListener() {
+    said_path_ = dir_ + "/said.wav";
+    reference_ = writeSpeech(said_path_);
+    ASSERT_FALSE(reference_.empty());
+    server_ = std::make_unique<Child>("vistel-server", std::vector<std::string>{"--port", "0"},
+                                      dir_ + "/server.log", true);
+    address_ = test::serverAddress(*server_);
+    ASSERT_FALSE(address_.empty());
+    heard_path_ = dir_ + "/heard.wav";
+    stats_path_ = dir_ + "/stats.json";
+    client_ = std::make_unique<Child>(
+        "vistel-client",
+        std::vector<std::string>{"--server", address_, "--room", "voice", "--name", "ears",
+                                 "--avatar", avatar_path_, "--headless", "--duration", "6",
+                                 "--mute", "--audio-out", heard_path_, "--stats-json", stats_path_},
+        dir_ + "/client.log", false);
+    ASSERT_TRUE(client_->waitForLog("UDP handshake done", 20.0)) << logOf(dir_ + "/client.log");
+  }
+
+  // The listener's end (its duration), then the server stopped; each exits with 0. The
+  // bots given are waited for in between.
+  void finishListening(std::initializer_list<std::pair<Child*, std::string>> bots) {
+    const auto client_status = client_->wait(40.0);
+    ASSERT_TRUE(client_status.has_value()) << logOf(dir_ + "/client.log");
+    EXPECT_EQ(*client_status, 0) << logOf(dir_ + "/client.log");
+    for (const auto& [bot, log] : bots) EXPECT_EQ(bot->wait(30.0).value_or(-999), 0) << logOf(log);
+    server_->signal(SIGTERM);
+    EXPECT_EQ(server_->wait(30.0).value_or(-999), 0) << logOf(dir_ + "/server.log");
+  }
+
+  std::string said_path_, address_, heard_path_, stats_path_;
+  std::vector<float> reference_;
+  std::unique_ptr<Child> server_, client_;
+};
 
 TEST_F(VoiceSession, BotSpeaksObserverHearsItFromWhereItStands) {
-  // What the bot says: 3 s of continuous synthetic speech.
-  const std::string said_path = dir_ + "/said.wav";
-  const std::vector<float> reference = writeSpeech(said_path);
-  ASSERT_FALSE(reference.empty());
-
-  Child server("vistel-server", {"--port", "0"}, dir_ + "/server.log", true);
-  const std::string address = test::serverAddress(server);
-  ASSERT_FALSE(address.empty());
-
-  const std::string heard_path = dir_ + "/heard.wav";
-  const std::string stats_path = dir_ + "/stats.json";
-  Child client("vistel-client",
-               {"--server", address, "--room", "voice", "--name", "ears", "--avatar", avatar_path_,
-                "--headless", "--duration", "6", "--mute", "--audio-out", heard_path,
-                "--stats-json", stats_path},
-               dir_ + "/client.log", false);
+  // What the bot says: 3 s of continuous synthetic speech (writeSpeech).
+  ASSERT_NO_FATAL_FAILURE(startListener());
   // Seats go round the ring so that the first two face each other: a silent bot takes the
   // seat facing the listener, and the speaker stands at the listener's side.
-  ASSERT_TRUE(client.waitForLog("UDP handshake done", 20.0)) << logOf(dir_ + "/client.log");
   Child filler("vistel-bot",
-               {"--server", address, "--room", "voice", "--name", "opposite", "--avatar",
+               {"--server", address_, "--room", "voice", "--name", "opposite", "--avatar",
                 avatar_path_, "--bvh", bvh_path_, "--loop", "--duration", "6"},
                dir_ + "/filler.log", false);
-  ASSERT_TRUE(client.waitForLog("member 'opposite'", 20.0)) << logOf(dir_ + "/client.log");
+  ASSERT_TRUE(client_->waitForLog("member 'opposite'", 20.0)) << logOf(dir_ + "/client.log");
   Child bot("vistel-bot",
-            {"--server", address, "--room", "voice", "--name", "mouth", "--avatar", avatar_path_,
-             "--bvh", bvh_path_, "--loop", "--duration", "5", "--voice", said_path},
+            {"--server", address_, "--room", "voice", "--name", "mouth", "--avatar", avatar_path_,
+             "--bvh", bvh_path_, "--loop", "--duration", "5", "--voice", said_path_},
             dir_ + "/bot.log", false);
 
-  const auto client_status = client.wait(40.0);
-  ASSERT_TRUE(client_status.has_value()) << logOf(dir_ + "/client.log");
-  EXPECT_EQ(*client_status, 0) << logOf(dir_ + "/client.log");
-  EXPECT_EQ(bot.wait(30.0).value_or(-999), 0) << logOf(dir_ + "/bot.log");
-  EXPECT_EQ(filler.wait(30.0).value_or(-999), 0) << logOf(dir_ + "/filler.log");
-  server.signal(SIGTERM);
-  EXPECT_EQ(server.wait(30.0).value_or(-999), 0) << logOf(dir_ + "/server.log");
+  ASSERT_NO_FATAL_FAILURE(
+      finishListening({{&bot, dir_ + "/bot.log"}, {&filler, dir_ + "/filler.log"}}));
   std::printf("[ measure  ] client: %s\n", logOf(dir_ + "/client.log").c_str());
   // Upstream: the bot speaks at the default bitrate; its sealed datagrams while speaking.
   const auto [sealed_kbps, opus_kbps] = sentKbps(logOf(dir_ + "/bot.log"));
@@ -278,7 +293,7 @@ TEST_F(VoiceSession, BotSpeaksObserverHearsItFromWhereItStands) {
   EXPECT_LE(sealed_kbps, 32.0);
 
   // The client's voice stats.
-  auto text = readFileText(stats_path);
+  auto text = readFileText(stats_path_);
   ASSERT_TRUE(text) << logOf(dir_ + "/client.log");
   const auto stats = nlohmann::json::parse(*text);
   ASSERT_TRUE(stats.contains("voice")) << *text;
@@ -297,10 +312,10 @@ TEST_F(VoiceSession, BotSpeaksObserverHearsItFromWhereItStands) {
   EXPECT_LT(p99, 500.0);
 
   // What it heard: the ear nearer the speaker against what was said.
-  auto heard = readAudioFile(heard_path);
+  auto heard = readAudioFile(heard_path_);
   ASSERT_TRUE(heard) << heard.error().message;
   ASSERT_EQ(heard->channels, 2);
-  const Heard match = compareHeard(reference, *heard);
+  const Heard match = compareHeard(reference_, *heard);
   const double left_db = match.left_db, right_db = match.right_db;
   std::printf(
       "[ measure  ] heard vs said (nearer ear, no loss): correlation %.3f (half-second pieces "
@@ -323,13 +338,13 @@ TEST_F(VoiceSession, BotSpeaksObserverHearsItFromWhereItStands) {
   const glm::vec3 place(where[0].get<float>(), where[1].get<float>(), where[2].get<float>());
   const SpatialParams params = spatialParams(SpatialSettings{}, HeadPose{}, place);
   SpatialSourceState state;
-  std::vector<float> rendered(2 * reference.size(), 0.0f);
-  for (std::size_t i = 0; i + kVoiceFrameSamples <= reference.size(); i += kVoiceFrameSamples) {
-    spatialiseAdd(std::span<const float>(reference).subspan(i, kVoiceFrameSamples), params, state,
+  std::vector<float> rendered(2 * reference_.size(), 0.0f);
+  for (std::size_t i = 0; i + kVoiceFrameSamples <= reference_.size(); i += kVoiceFrameSamples) {
+    spatialiseAdd(std::span<const float>(reference_).subspan(i, kVoiceFrameSamples), params, state,
                   std::span<float>(rendered).subspan(2 * i, 2 * kVoiceFrameSamples));
   }
-  std::vector<float> rendered_left(reference.size()), rendered_right(reference.size());
-  for (std::size_t i = 0; i < reference.size(); ++i) {
+  std::vector<float> rendered_left(reference_.size()), rendered_right(reference_.size());
+  for (std::size_t i = 0; i < reference_.size(); ++i) {
     rendered_left[i] = rendered[2 * i];
     rendered_right[i] = rendered[2 * i + 1];
   }
@@ -363,33 +378,15 @@ TEST_F(VoiceSession, BotSpeaksObserverHearsItFromWhereItStands) {
 // concealment keep the speech intelligible, and the playout buffer's delay grows with the
 // jitter only.
 TEST_F(VoiceSession, SpeechSurvivesTenPercentLossAndJitter) {
-  const std::string said_path = dir_ + "/said.wav";
-  const std::vector<float> reference = writeSpeech(said_path);
-  ASSERT_FALSE(reference.empty());
-  Child server("vistel-server", {"--port", "0"}, dir_ + "/server.log", true);
-  const std::string address = test::serverAddress(server);
-  ASSERT_FALSE(address.empty());
-  const std::string heard_path = dir_ + "/heard.wav";
-  const std::string stats_path = dir_ + "/stats.json";
-  Child client("vistel-client",
-               {"--server", address, "--room", "voice", "--name", "ears", "--avatar", avatar_path_,
-                "--headless", "--duration", "6", "--mute", "--audio-out", heard_path,
-                "--stats-json", stats_path},
-               dir_ + "/client.log", false);
-  ASSERT_TRUE(client.waitForLog("UDP handshake done", 20.0)) << logOf(dir_ + "/client.log");
+  ASSERT_NO_FATAL_FAILURE(startListener());
   Child bot("vistel-bot",
-            {"--server", address, "--room", "voice", "--name", "mouth", "--avatar", avatar_path_,
-             "--bvh", bvh_path_, "--loop", "--duration", "5", "--voice", said_path, "--netsim",
+            {"--server", address_, "--room", "voice", "--name", "mouth", "--avatar", avatar_path_,
+             "--bvh", bvh_path_, "--loop", "--duration", "5", "--voice", said_path_, "--netsim",
              "loss=0.1,jitter=50ms,dir=out,seed=3"},
             dir_ + "/bot.log", false);
-  const auto client_status = client.wait(40.0);
-  ASSERT_TRUE(client_status.has_value()) << logOf(dir_ + "/client.log");
-  EXPECT_EQ(*client_status, 0) << logOf(dir_ + "/client.log");
-  EXPECT_EQ(bot.wait(30.0).value_or(-999), 0) << logOf(dir_ + "/bot.log");
-  server.signal(SIGTERM);
-  EXPECT_EQ(server.wait(30.0).value_or(-999), 0) << logOf(dir_ + "/server.log");
+  ASSERT_NO_FATAL_FAILURE(finishListening({{&bot, dir_ + "/bot.log"}}));
 
-  auto text = readFileText(stats_path);
+  auto text = readFileText(stats_path_);
   ASSERT_TRUE(text) << logOf(dir_ + "/client.log");
   const auto voice = nlohmann::json::parse(*text)["voice"];
   std::printf("[ measure  ] voice stats (10%% loss, 50 ms jitter): %s\n", voice.dump().c_str());
@@ -399,9 +396,9 @@ TEST_F(VoiceSession, SpeechSurvivesTenPercentLossAndJitter) {
   std::printf("[ measure  ] mouth to ear, 10%% loss and 50 ms jitter: p50 %.1f ms, p99 %.1f ms\n",
               p50, p99);
   EXPECT_LT(p99, 500.0);
-  auto heard = readAudioFile(heard_path);
+  auto heard = readAudioFile(heard_path_);
   ASSERT_TRUE(heard) << heard.error().message;
-  const Heard match = compareHeard(reference, *heard);
+  const Heard match = compareHeard(reference_, *heard);
   std::printf(
       "[ measure  ] heard vs said (nearer ear, 10%% loss, 50 ms jitter): correlation %.3f "
       "(half-second pieces %.3f)\n",

@@ -25,10 +25,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::string logOf(const std::string& path) {
-  auto text = readFileText(path);
-  return text ? *text : std::string("(no log)");
-}
+using test::logOf;
 
 // "vistel-server web on http://127.0.0.1:PORT/" -> "127.0.0.1:PORT".
 std::string webAddress(test::Program& server) {

@@ -35,10 +35,7 @@ namespace asio = boost::asio;
 namespace beast = boost::beast;
 namespace websocket = boost::beast::websocket;
 
-std::string logOf(const std::string& path) {
-  auto text = readFileText(path);
-  return text ? *text : std::string("(no log)");
-}
+using test::logOf;
 
 // A server with the web side on a free port; web() is its port (metrics() that of
 // --metrics-port, when `extra` asks for one).

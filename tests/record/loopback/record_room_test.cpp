@@ -33,12 +33,9 @@ namespace {
 
 using Child = test::Program;
 
-std::string logOf(const std::string& path) {
-  auto text = readFileText(path);
-  return text ? *text : std::string("(no log)");
-}
+using test::logOf;
 
-void sleepFor(double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); }
+using test::sleepFor;
 
 // three.js as Debian packages it (libjs-three, r111): the GLTFLoader loads `glb` and an
 // AnimationMixer plays it (tests/record/loopback/threejs_check.mjs); the boxes of each
