@@ -475,6 +475,12 @@ int main(int argc, char** argv) {
       voice_options.audio_out = frames_dir + "/heard.wav";
     }
     voice_options.label = "vistel-client: voice";
+    // --record: what is sent goes into the recording too (client/app/sensor_input.hpp).
+    if (sensors) {
+      voice_options.on_sent = [s = sensors.get()](double t, std::span<const std::uint8_t> p) {
+        s->recordVoice(t, p);
+      };
+    }
     auto started = VoiceEngine::start(driver, voice_options);
     if (!started) {
       spdlog::error("{}", started.error().message);

@@ -82,10 +82,48 @@ Status SensorInput::reopen(const std::string& record_to) {
   Result<std::unique_ptr<PostureSource>> opened = openPostureSource(options_.spec, avatar_, o);
   if (!opened) return opened.error();
   source_ = std::move(*opened);
+  recordVoiceTo(record_to);
   std::lock_guard lock(summary_mutex_);
   description_ = source_->describe();
   if (!record_to.empty()) recordings_ += (recordings_.empty() ? "" : ", ") + record_to;
   return {};
+}
+
+void SensorInput::recordVoiceTo(const std::string& path) {
+  std::unique_ptr<RecordingWriter> writer;
+  if (!path.empty()) {
+    auto opened = RecordingWriter::appendTo(path);
+    if (opened) {
+      writer = std::move(*opened);
+    } else {
+      report("voice not recorded: " + opened.error().message, true);
+    }
+  }
+  std::lock_guard lock(voice_mutex_);
+  voice_writer_ = std::move(writer);
+  have_offset_ = false;
+}
+
+void SensorInput::noteFrameClock(double frame_time, double arrival) {
+  std::lock_guard lock(voice_mutex_);
+  const double offset = frame_time - arrival;
+  if (!have_offset_ || offset > clock_offset_) clock_offset_ = offset;
+  have_offset_ = true;
+}
+
+void SensorInput::recordVoice(double capture_s, std::span<const std::uint8_t> packet) {
+  std::lock_guard lock(voice_mutex_);
+  if (!voice_writer_) return;
+  if (!have_offset_) {
+    ++voice_early_;
+    return;
+  }
+  if (Status s = voice_writer_->appendVoice(capture_s + clock_offset_, packet); !s) {
+    report("voice recording stopped: " + s.error().message, true);
+    voice_writer_.reset();
+    return;
+  }
+  ++voice_recorded_;
 }
 
 void SensorInput::report(const std::string& line, bool problem) const {
@@ -178,6 +216,7 @@ void SensorInput::run(net::NetDriver& driver, const std::atomic<bool>& stop) {
     switch (r.status) {
       case PollStatus::kFrame: {
         ++frames_;
+        noteFrameClock(source_->lastFrame().time, net::monotonicSeconds());
         publish(posture);
         calibrated_ = source_->calibrated();
         if (now - next_send > send_interval) next_send = now;  // after a gap: start afresh
@@ -203,6 +242,7 @@ void SensorInput::run(net::NetDriver& driver, const std::atomic<bool>& stop) {
           looped = true;
         }
         source_.reset();
+        recordVoiceTo("");
         if (Status s = reopen(""); !s) {
           report(fmt::format("cannot reopen {}: {}; holding the last posture", options_.spec,
                              s.error().message),
@@ -221,6 +261,7 @@ void SensorInput::run(net::NetDriver& driver, const std::atomic<bool>& stop) {
         }
         report(what, true);
         source_.reset();  // closes the devices and the recording (every frame so far is kept)
+        recordVoiceTo("");
         next_reopen = now + options_.reopen_interval_s;
         break;
       }
@@ -235,13 +276,20 @@ void SensorInput::run(net::NetDriver& driver, const std::atomic<bool>& stop) {
     }
   }
   source_.reset();
+  recordVoiceTo("");
 }
 
 std::string SensorInput::summary() const {
   std::lock_guard lock(summary_mutex_);
   std::string s = fmt::format("{}: {} frames, {}, {} postures sent", description_, frames_.load(),
                               calibrated_ ? "calibrated" : "not calibrated", sent_.load());
-  if (!recordings_.empty()) s += "; recorded to " + recordings_;
+  if (!recordings_.empty()) {
+    s += "; recorded to " + recordings_;
+    std::lock_guard voice_lock(voice_mutex_);
+    s += fmt::format(" with {} voice frames", voice_recorded_);
+    if (voice_early_ > 0)
+      s += fmt::format(" ({} before the first sensor frame left out)", voice_early_);
+  }
   if (!last_problem_.empty()) s += "; last problem: " + last_problem_;
   return s;
 }

@@ -20,12 +20,28 @@
 // reopening); a recording in progress continues into FILE-2.vrec, FILE-3.vrec, ... so
 // nothing recorded is overwritten. A clip (sim:) or a recording played as the source loops:
 // it is reopened at its end (a --record recording holds its first pass only).
+//
+// Voice in the recording: recordVoice (the VoiceEngine's on_sent, on the voice thread)
+// appends every voice frame the client sends to the recording in progress as a voice record
+// (common/sensors/recording.hpp, type 4), through a second writer on the same file (whole
+// records: RecordingWriter::appendTo), so a muted or silent stretch has no records. Clock
+// mapping: a voice frame's capture time is on net::monotonicSeconds; the frames' times are
+// on the sensor clock (a device's clock, or a clip's time for sim:, paced to real time).
+// The sensor thread stamps each frame as it comes out of poll() and keeps the offset
+// (frame time - arrival time) of the quickest frame since the recording (re)started: the
+// sensor clock minus the monotonic one, short of the least delay between a reading and
+// its arrival (a few ms: the reading, the solve). A voice frame captured at monotonic time c
+// is recorded at sensor time c + offset; frames before the first sensor frame (no offset
+// yet) are not recorded (counted in summary()). The voice stops being recorded with the
+// frames: when the sensors are unplugged (a reopened device's FILE-2.vrec gets it again) and
+// after the first pass of a sim: or recording: source.
 #pragma once
 
 #include <atomic>
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <span>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -35,6 +51,7 @@
 #include "common/anim/skeleton.hpp"
 #include "common/base/result.hpp"
 #include "common/sensors/io/posture_source.hpp"
+#include "common/sensors/recording.hpp"
 
 namespace vistel {
 
@@ -88,8 +105,13 @@ class SensorInput {
   void copyLatest(Posture& out) const;
 
   // One line for the exit report: the source, frames read, calibration, postures sent,
-  // recording.
+  // recording (with the voice frames recorded).
   std::string summary() const;
+
+  // Thread-safe (the voice thread): records one voice frame sent, captured at capture_s
+  // (net::monotonicSeconds), into the recording in progress (see above); nothing without
+  // one. A write error is reported once and ends the voice recording.
+  void recordVoice(double capture_s, std::span<const std::uint8_t> packet);
 
  private:
   explicit SensorInput(SensorInputOptions options, Skeleton avatar);
@@ -97,6 +119,10 @@ class SensorInput {
   Status reopen(const std::string& record_to);
   void publish(const Posture& posture);
   void report(const std::string& line, bool problem = false) const;
+  // The voice's writer for a recording file (empty: stop recording voice). Sensor thread.
+  void recordVoiceTo(const std::string& path);
+  // A frame came out of poll() at monotonic time arrival: the sensor clock's offset.
+  void noteFrameClock(double frame_time, double arrival);
 
   SensorInputOptions options_;
   Skeleton avatar_;
@@ -114,6 +140,14 @@ class SensorInput {
   std::string description_;           // what source_ reads (its describe())
   std::string recordings_;            // the files written, comma separated
   std::string last_problem_;
+
+  // The voice track (recordVoice).
+  mutable std::mutex voice_mutex_;
+  std::unique_ptr<RecordingWriter> voice_writer_;
+  bool have_offset_ = false;
+  double clock_offset_ = 0.0;  // sensor clock - net::monotonicSeconds
+  std::uint64_t voice_recorded_ = 0;
+  std::uint64_t voice_early_ = 0;  // before the first frame: not recorded
 };
 
 }  // namespace vistel

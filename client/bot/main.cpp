@@ -26,10 +26,16 @@
 // participant and the server on UDP (client/net/net_sim.hpp), seeded per participant.
 // --token: the join token(s) for a server that requires them (`vistel-server token`), one
 // per participant in name order (a token admits one name).
-// --voice FILE.wav: every participant speaks the file (client/voice/voice_engine.hpp), from
-// the moment it is live, once (or endlessly with --loop); --audio-out FILE.wav writes
-// what the first participant hears (spatialised from the seats). Bots never open audio
-// devices. --mute joins with voice muted, --no-audio without voice.
+// Voice: every participant speaks (client/voice/voice_engine.hpp) the --voice FILE.wav, or
+// else a --recording's own voice track (record type 4; the log says which), in step with
+// the motion: a speaking bot holds the clip's first frame until the first participant is
+// live and its clock has converged, then starts motion and voice together from that moment
+// (the WAV's first sample, or the track's first packet at its recorded offset after the
+// first frame); with --loop both restart with each pass of the motion (a WAV longer than a
+// pass restarts at the next pass after its end). --audio-out FILE.wav writes what the
+// first participant hears (spatialised from the seats). Bots never open audio devices.
+// --mute joins with voice muted, --no-audio without voice. At the end each speaker prints
+// when its first voice frame was captured after the replay's start ("voice onset").
 // Never initialises GLFW. Exit status: 0, 1 on an error (a participant the server refused
 // or dropped included: the refusal is printed), 2 on bad usage (an unknown --log-level too).
 
@@ -110,7 +116,8 @@ int main(int argc, char** argv) {
   VoiceOptions voice_options;
   bool no_audio = false;
   app.add_option("--voice,--audio-in", voice_options.audio_in,
-                 "audio file (WAV) every participant speaks once live (endlessly with --loop)");
+                 "audio file (WAV) every participant speaks from the clip's first frame (looping "
+                 "with it under --loop); replaces a recording's own voice track");
   app.add_option("--audio-out", voice_options.audio_out,
                  "write what the first participant hears to this WAV file (stereo, 48 kHz)");
   addSharedVoiceOptions(app, voice_options, no_audio, "join with the voice muted",
@@ -245,12 +252,27 @@ int main(int argc, char** argv) {
     drivers.back()->setNetSim(*netsim);
   }
   // Voice: an engine per speaking participant (and for the first one's ears with
-  // --audio-out); files only, never devices.
+  // --audio-out); files only, never devices. What they say: --voice, else the recording's
+  // voice track; scheduled from the replay's start (below).
   std::vector<std::unique_ptr<VoiceEngine>> voices(drivers.size());
+  const bool track = replay && replay->voice().samples != nullptr;
+  if (track && !voice_options.audio_in.empty()) {
+    std::printf("vistel-bot: voice: %s (the recording's own voice track is not used)\n",
+                voice_options.audio_in.c_str());
+  } else if (track && !no_audio) {
+    voice_options.input_samples = replay->voice().samples;
+    std::printf(
+        "vistel-bot: voice: the recording's own voice track (%zu packets, %.1f s, first %.3f s "
+        "after the first frame)\n",
+        replay->voice().packets, replay->voice().seconds, replay->voice().first_offset_s);
+  }
+  const bool speaking =
+      !no_audio && (!voice_options.audio_in.empty() || voice_options.input_samples);
   if (!no_audio) {
     for (std::size_t i = 0; i < drivers.size(); ++i) {
       VoiceOptions options = voice_options;
-      options.capture = !options.audio_in.empty();
+      options.capture = speaking;
+      options.scheduled_input = speaking;
       options.playback = i == 0 && !options.audio_out.empty();
       if (!options.capture && !options.playback) continue;
       if (i > 0) options.audio_out.clear();
@@ -274,6 +296,11 @@ int main(int argc, char** argv) {
   // The source loop: every participant's posture at each frame time, paced on the
   // steady clock (the send rate is fixed once the server's tick rate is known).
   const auto start = std::chrono::steady_clock::now();
+  const double start_mono = monotonicSeconds();  // the same moment on the voice's clock
+  // The replay's start, in seconds after `start`: at once, or for a speaking bot once the
+  // first participant can speak (live, clock converged), motion and voice together.
+  double replay_origin = speaking ? -1.0 : 0.0;
+  const double pass_s = replay ? replay->passSeconds() : players[0]->duration();
   double interval = 1.0 / clip_rate;
   bool rate_fixed = false;
   Posture posture;
@@ -283,10 +310,25 @@ int main(int argc, char** argv) {
   while (!g_stop) {
     const double t = static_cast<double>(frame) * interval;
     if (duration > 0.0 && t >= duration) break;
-    if (!replay && !loop && t > players[0]->duration() + 1e-9) break;
     std::this_thread::sleep_until(start +
                                   std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                       std::chrono::duration<double>(t)));
+    if (replay_origin < 0.0 && drivers[0]->withSession([](const ClientSession& s, double) {
+          return s.state() == SessionState::kLive && s.clock().sampleCount() >= 3;
+        })) {
+      // The first speaker's frame grid decides (its first frame whole); the motion follows.
+      double origin = -1.0;
+      for (auto& v : voices) {
+        if (!v) continue;
+        const double at =
+            v->startInputAt(origin < 0.0 ? start_mono + t : origin, loop ? pass_s : 0.0);
+        if (origin < 0.0) origin = at;
+      }
+      replay_origin = origin < 0.0 ? t : origin - start_mono;
+      spdlog::info("replay and voice start {:.3f} s after joining began", replay_origin);
+    }
+    const double rt = replay_origin < 0.0 ? 0.0 : std::max(0.0, t - replay_origin);  // replay time
+    if (!replay && !loop && rt > players[0]->duration() + 1e-9) break;
     // Once live: cap the rate at the room's tick rate.
     if (!rate_fixed && drivers[0]->state() == SessionState::kLive) {
       const double tick =
@@ -299,7 +341,7 @@ int main(int argc, char** argv) {
       spdlog::info("sending {:.1f} postures/s per participant", 1.0 / interval);
     }
     // A recording: solved once per send for everyone; its end (without --loop) ends the run.
-    if (replay && !replay->advanceTo(t, posture)) {
+    if (replay && !replay->advanceTo(rt, posture)) {
       std::printf("vistel-bot: replay finished after %zu frames: %s\n", replay->framesSolved(),
                   replay->endMessage().c_str());
       break;
@@ -309,7 +351,7 @@ int main(int argc, char** argv) {
     for (int i = 0; i < count; ++i) {
       if (drivers[static_cast<std::size_t>(i)]->state() == SessionState::kClosed) continue;
       ++open;
-      if (!replay) players[static_cast<std::size_t>(i)]->sample(t, loop, posture);
+      if (!replay) players[static_cast<std::size_t>(i)]->sample(rt, loop, posture);
       drivers[static_cast<std::size_t>(i)]->sendPosture(posture);
       // What a client's frame would show of each remote member now.
       drivers[static_cast<std::size_t>(i)]->withSession([&](const ClientSession& s, double now) {
@@ -369,6 +411,13 @@ int main(int argc, char** argv) {
       exit_code = 1;
     }
     std::printf("vistel-bot: %s: %s\n", names[i].c_str(), voices[i]->summary().c_str());
+    const double first = voices[i]->report().first_sent_capture_s;
+    if (speaking && replay_origin >= 0.0 && first >= 0.0) {
+      std::printf(
+          "vistel-bot: %s: voice onset %.1f ms after the replay's first frame (the first frame "
+          "sent, captured from then)\n",
+          names[i].c_str(), 1e3 * (first - (start_mono + replay_origin)));
+    }
   }
   for (std::size_t i = 0; i < drivers.size(); ++i) {
     const std::string error = drivers[i]->error();

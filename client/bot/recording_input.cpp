@@ -5,6 +5,8 @@
 #include <fmt/format.h>
 
 #include "common/sensors/recording.hpp"
+#include "common/voice/opus_voice.hpp"
+#include "common/voice/voice_format.hpp"
 
 namespace vistel {
 
@@ -36,6 +38,36 @@ Result<std::unique_ptr<RecordingReplay>> RecordingReplay::open(const std::string
       replay->frame_count_, replay->duration_, replay->rate_hz_, h.participant,
       h.source.empty() ? "(unknown)" : h.source,
       h.calibration || !recording->calibrations.empty() ? ", calibrated" : ", never calibrated");
+  // The voice track, decoded onto the replay's timeline.
+  if (!recording->voice.empty()) {
+    auto decoder = OpusVoiceDecoder::create();
+    if (!decoder) return decoder.error();
+    auto samples = std::make_shared<std::vector<float>>();
+    ReplayVoice& v = replay->voice_;
+    for (const VoiceRecord& r : recording->voice) {
+      const std::int64_t at = voiceSamplesFromSeconds(r.time - replay->first_time_);
+      if (at < 0) {
+        ++v.dropped;
+        continue;
+      }
+      const auto from = static_cast<std::size_t>(at);
+      if (samples->size() < from + kVoiceFrameSamples) samples->resize(from + kVoiceFrameSamples);
+      if (!decoder->decode(r.packet,
+                           std::span<float>(*samples).subspan(from, kVoiceFrameSamples))) {
+        ++v.dropped;
+        continue;
+      }
+      if (v.packets++ == 0) v.first_offset_s = voiceSecondsFromSamples(at);
+    }
+    // Nothing past one pass: a looping replay restarts its voice with its motion.
+    const auto pass = static_cast<std::size_t>(voiceSamplesFromSeconds(replay->passSeconds()));
+    if (samples->size() > pass) samples->resize(pass);
+    v.seconds = voiceSecondsFromSamples(static_cast<std::int64_t>(samples->size()));
+    if (v.packets > 0) v.samples = std::move(samples);
+    replay->summary_ +=
+        fmt::format("; voice track: {} packets, first {:.3f} s after the first frame{}", v.packets,
+                    v.first_offset_s, v.dropped > 0 ? fmt::format(" ({} dropped)", v.dropped) : "");
+  }
   // The solver side: the same PostureSource as a live client, fed from the file.
   if (Status s = replay->openSource(); !s) return s.error();
   return replay;

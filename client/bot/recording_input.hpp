@@ -8,6 +8,14 @@
 // speed whatever the recording's frame rate. The calibration is applied where the live
 // session made it (or from the header), so the replay solves exactly as live did.
 //
+// The voice track (record type 4, common/sensors/recording.hpp), when the file has one:
+// its Opus packets decoded at open() into one mono 48 kHz timeline whose sample 0 is the
+// first frame's time (a packet recorded at sensor time t lands at (t - first frame) *
+// 48000; gaps are silence; packets before the first frame are dropped, a packet that does
+// not decode is silence; the timeline ends with the last frame's pass, passSeconds()), for
+// the bot's VoiceEngine to speak from the replay's start
+// (VoiceEngine::startInputAt).
+//
 // A damaged file (a process killed mid-write, a truncated copy) replays up to its last good
 // record; damage() says where and why it broke. With loop, the recording starts over after
 // its last frame (a fresh solver, so every pass is the same).
@@ -16,6 +24,7 @@
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "common/anim/posture.hpp"
 #include "common/anim/skeleton.hpp"
@@ -23,6 +32,14 @@
 #include "common/sensors/io/posture_source.hpp"
 
 namespace vistel {
+
+struct ReplayVoice {
+  std::shared_ptr<const std::vector<float>> samples;  // null without a voice track
+  std::size_t packets = 0;                            // decoded into samples
+  std::size_t dropped = 0;                            // before the first frame, or not decodable
+  double first_offset_s = 0.0;  // the first packet kept, after the first frame
+  double seconds = 0.0;         // samples' length
+};
 
 class RecordingReplay {
  public:
@@ -47,6 +64,9 @@ class RecordingReplay {
   const std::string& endMessage() const { return end_message_; }
   double frameRateHz() const { return rate_hz_; }
   double duration() const { return duration_; }
+  // One pass with loop: the last frame's time after the first plus one frame interval.
+  double passSeconds() const { return duration_ + 1.0 / rate_hz_; }
+  const ReplayVoice& voice() const { return voice_; }
   std::size_t frameCount() const { return frame_count_; }
   std::size_t framesSolved() const { return frames_solved_; }
 
@@ -71,6 +91,7 @@ class RecordingReplay {
   double last_time_ = 0.0;   // recording time of the newest solved frame
   bool started_ = false;     // a frame of this pass has been solved
   bool ended_ = false;
+  ReplayVoice voice_;
 };
 
 }  // namespace vistel

@@ -92,6 +92,9 @@ struct VoiceEngine::Impl {
   // Input.
   std::vector<float> input_clip;  // audio_in, mono 48 kHz
   std::size_t input_pos = 0;
+  std::shared_ptr<const std::vector<float>> scheduled;  // scheduled input, else null
+  std::atomic<bool> origin_set{false};
+  double origin = 0.0, period = 0.0;  // startInputAt (under mutex)
   bool input_started = false;
   bool input_done = false;
   std::unique_ptr<AudioDevice> device;  // microphone and/or speakers
@@ -155,6 +158,11 @@ Result<std::unique_ptr<VoiceEngine>> VoiceEngine::start(std::shared_ptr<net::Net
       if (!clip) return clip.error();
       m.input_clip = monoMix(*clip);
     }
+    if (options.input_samples) m.input_clip = *options.input_samples;
+    if (options.scheduled_input) {
+      m.scheduled = std::make_shared<const std::vector<float>>(std::move(m.input_clip));
+      m.input_clip.clear();
+    }
     VoiceActivitySettings vad_settings;
     vad_settings.denoise = options.denoise && options.audio_in.empty();
     auto vad = VoiceActivity::create(vad_settings);
@@ -165,7 +173,7 @@ Result<std::unique_ptr<VoiceEngine>> VoiceEngine::start(std::shared_ptr<net::Net
     m.encoder.emplace(std::move(*encoder));
   }
   // Devices for the directions without a file; none: said once, carried on silent.
-  const bool want_in = options.capture && options.audio_in.empty();
+  const bool want_in = options.capture && options.audio_in.empty() && !options.input_samples;
   const bool want_out = options.playback && options.audio_out.empty();
   if (want_in || want_out) {
     auto device = AudioDevice::open(want_in, want_out);
@@ -214,6 +222,18 @@ Result<std::unique_ptr<VoiceEngine>> VoiceEngine::start(std::shared_ptr<net::Net
 
 VoiceEngine::~VoiceEngine() {
   if (Status st = stop(); !st) spdlog::warn("{}", st.error().message);
+}
+
+double VoiceEngine::startInputAt(double origin_s, double period_s) {
+  Impl& m = *impl_;
+  // Frame k of the engine covers [t0 + (k - 1) * 20 ms, t0 + k * 20 ms).
+  const double frames = std::ceil((origin_s - m.t0) / kFrameS - 1e-9);
+  const double origin = m.t0 + frames * kFrameS;
+  std::lock_guard lock(m.mutex);
+  m.origin = origin;
+  m.period = std::max(0.0, period_s);
+  m.origin_set = true;
+  return origin;
 }
 
 void VoiceEngine::setScene(const HeadPose& listener, std::span<const SpeakerSpot> speakers) {
@@ -271,7 +291,32 @@ void VoiceEngine::run() {
     // 1. Capture and send.
     bool have_frame = false;
     if (m.options.capture) {
-      if (!m.input_clip.empty()) {
+      if (m.scheduled) {
+        // The input's timeline from the origin: this tick's frame began 20 ms ago.
+        if (m.origin_set && session.live) {
+          double origin = 0.0, period = 0.0;
+          {
+            std::lock_guard lock(m.mutex);
+            origin = m.origin;
+            period = m.period;
+          }
+          const std::vector<float>& in = *m.scheduled;
+          const std::int64_t size = static_cast<std::int64_t>(in.size());
+          std::int64_t wrap = 0;  // samples per pass (0: no wrapping)
+          if (m.options.loop_input) {
+            const std::int64_t pass = period > 0.0 ? voiceSamplesFromSeconds(period) : size;
+            wrap = pass > 0 ? pass * std::max<std::int64_t>(1, (size + pass - 1) / pass) : 0;
+          }
+          const std::int64_t pos = voiceSamplesFromSeconds(tick_time - kFrameS - origin);
+          for (int i = 0; i < kVoiceFrameSamples; ++i) {
+            std::int64_t at = pos + i;
+            if (at >= 0 && wrap > 0) at %= wrap;
+            m.frame[static_cast<std::size_t>(i)] =
+                at >= 0 && at < size ? in[static_cast<std::size_t>(at)] : 0.0f;
+          }
+          have_frame = pos + kVoiceFrameSamples > 0;
+        }
+      } else if (!m.input_clip.empty()) {
         if (!m.input_started && session.live && session.clock_samples >= kClockSamplesBeforeFile) {
           m.input_started = true;
         }
@@ -323,8 +368,12 @@ void VoiceEngine::run() {
           out.payload = std::span<const std::uint8_t>(m.packet.data(), *size);
           sent = m.driver->sendVoice(out);
           if (sent) {
+            if (m.options.on_sent) m.options.on_sent(tick_time - kFrameS, out.payload);
             std::lock_guard lock(m.mutex);
             m.report.payload_bytes_sent += *size;
+            if (m.report.first_sent_capture_s < 0.0) {
+              m.report.first_sent_capture_s = tick_time - kFrameS;
+            }
           }
         }
       }

@@ -22,6 +22,19 @@
 // network, playout buffer and device buffer are all in it). A file input starts once the
 // session is live and its clock has converged (3 pongs), so its first sample is sent.
 //
+// Scheduled input (a bot replaying a clip or a .vrec, client/bot): with scheduled_input
+// the file (or input_samples) waits for startInputAt(origin, period): the frame captured
+// during [T - 20 ms, T) on the engine's clock (net::monotonicSeconds) is the input's
+// samples from (T - 20 ms - origin) * 48000 on, silence before the origin and past the
+// input's end; with loop_input and a period P (the motion's pass) the input restarts at
+// the first multiple of P at or after its end, so each of its passes starts with one of
+// the motion's and none is cut. Frames before the session is live are not sent
+// (lost, as a live speaker's would be).
+//
+// Recording what is sent (vistel-client --record): on_sent, if set, is called on the
+// engine's thread with every frame sent — its capture time (the frame's first sample, s on
+// net::monotonicSeconds) and its Opus packet — so muted or silent stretches have none.
+//
 // Devices: with no file given, the default PortAudio device for that direction; when
 // there is none, the engine says so once and goes on without it (silent). Threads: every
 // public call is thread-safe.
@@ -29,6 +42,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <span>
@@ -59,6 +73,12 @@ struct VoiceOptions {
                                 // play from the capture (common/voice/echo_canceller)
   OpusVoiceSettings opus;       // 16 kbit/s, wideband, FEC, 10% loss hint by default
   std::string label = "voice";  // names log lines
+  // Instead of audio_in: mono 48 kHz samples to speak (shared, read-only).
+  std::shared_ptr<const std::vector<float>> input_samples;
+  bool scheduled_input = false;  // the input waits for startInputAt (see above)
+  // Every frame sent: (capture time s on net::monotonicSeconds, Opus packet). Engine thread;
+  // must not block for long (a tick is 20 ms).
+  std::function<void(double, std::span<const std::uint8_t>)> on_sent;
 };
 
 // Where a speaker is: its head in room space (metres).
@@ -93,7 +113,9 @@ struct VoiceReport {
   double payload_kbps = 0.0;            // the Opus payload alone, while speaking
   std::uint64_t mouth_samples = 0;      // jaw openings kept for the timeline (noteMouth)
   std::uint64_t payload_bytes_sent = 0;
-  std::vector<SpeakerReport> heard;  // speakers still known, by id
+  std::vector<SpeakerReport> heard;    // speakers still known, by id
+  double first_sent_capture_s = -1.0;  // the first frame sent: its capture time
+                                       // (net::monotonicSeconds), -1 before any
 };
 
 class VoiceEngine {
@@ -105,6 +127,14 @@ class VoiceEngine {
   ~VoiceEngine();
   VoiceEngine(const VoiceEngine&) = delete;
   VoiceEngine& operator=(const VoiceEngine&) = delete;
+
+  // With scheduled_input: the input's sample 0 is captured at the start of the engine's
+  // first 20 ms frame that begins at or after origin_s (net::monotonicSeconds), so the first
+  // frame sent is whole, as a live talkspurt's is; returns that time (at most 20 ms after
+  // origin_s), for the caller to start its motion there too. With loop_input the input
+  // restarts at the first multiple of period_s (> 0; 0: the input's own length) at or after
+  // its end. Thread-safe; a later call moves the origin.
+  double startInputAt(double origin_s, double period_s);
 
   void setMuted(bool muted) { muted_ = muted; }
   bool muted() const { return muted_; }

@@ -17,6 +17,8 @@ constexpr std::uint8_t kMagic[8] = {'V', 'R', 'E', 'C', '\r', '\n', 0x1a, '\n'};
 constexpr std::uint8_t kTypeHeader = 1;
 constexpr std::uint8_t kTypeFrame = 2;
 constexpr std::uint8_t kTypeCalibration = 3;
+constexpr std::uint8_t kTypeVoice = 4;
+constexpr std::size_t kVoiceBase = 10;  // f64 time, u16 packet bytes
 constexpr std::size_t kFileHeaderSize = 12;
 constexpr std::size_t kMaxPose = 1024;  // bytes of CalibrationRecord::pose
 
@@ -202,6 +204,23 @@ bool readFrame(ByteReader& r, SensorFrame& out, int stations, std::string& why) 
   return true;
 }
 
+bool readVoice(ByteReader& r, VoiceRecord& out, std::string& why) {
+  out.time = r.f64();
+  const std::uint16_t size = r.u16();
+  if (!r.ok() || !finite(out.time)) {
+    why = "voice time cut short or not finite";
+    return false;
+  }
+  if (size == 0 || size > kRecordingMaxVoicePacket || size != r.remaining()) {
+    why = fmt::format("voice packet of {} bytes in {} ({} allowed)", size, r.remaining(),
+                      kRecordingMaxVoicePacket);
+    return false;
+  }
+  const std::span<const std::uint8_t> packet = r.bytes(size);
+  out.packet.assign(packet.begin(), packet.end());
+  return r.ok();
+}
+
 }  // namespace
 
 int recordingStationCount(std::uint32_t version) {
@@ -277,6 +296,16 @@ void encodeCalibrationRecord(const CalibrationRecord& c, std::vector<std::uint8_
   finishRecord(out, start);
 }
 
+void encodeVoiceRecord(double time, std::span<const std::uint8_t> packet,
+                       std::vector<std::uint8_t>& out) {
+  const std::size_t start = beginRecord(out, kTypeVoice);
+  ByteWriter w(out);
+  w.f64(time);
+  w.u16(static_cast<std::uint16_t>(packet.size()));
+  w.array(packet);
+  finishRecord(out, start);
+}
+
 namespace {
 
 constexpr std::size_t kRecordOverhead = 9;  // u32 size, u8 type, u32 CRC
@@ -343,7 +372,7 @@ Framing frameAt(std::span<const std::uint8_t> bytes, std::size_t pos) {
   return f;
 }
 
-// Where a frame or calibration record starts at or after `from` (the resynchronisation
+// Where a frame, calibration or voice record starts at or after `from` (the resynchronisation
 // after a damaged stretch), or bytes.size(). Only a size that fits the type is checked
 // with the CRC, so random bytes cost little.
 std::size_t nextRecord(std::span<const std::uint8_t> bytes, std::size_t from,
@@ -352,11 +381,13 @@ std::size_t nextRecord(std::span<const std::uint8_t> bytes, std::size_t from,
   const std::size_t calibration = calibrationPayloadBase(version);
   for (std::size_t q = from; q + kRecordOverhead <= bytes.size(); ++q) {
     const std::uint8_t type = bytes[q + 4];
-    if (type != kTypeFrame && type != kTypeCalibration) continue;
+    if (type != kTypeFrame && type != kTypeCalibration && type != kTypeVoice) continue;
     std::uint32_t size;
     std::memcpy(&size, bytes.data() + q, 4);
-    const bool fits =
-        type == kTypeFrame ? size == frame : size >= calibration && size <= calibration + kMaxPose;
+    const bool fits = type == kTypeFrame ? size == frame
+                      : type == kTypeVoice
+                          ? size > kVoiceBase && size <= kVoiceBase + kRecordingMaxVoicePacket
+                          : size >= calibration && size <= calibration + kMaxPose;
     if (fits && frameAt(bytes, q).ok) return q;
   }
   return bytes.size();
@@ -439,11 +470,14 @@ Result<Recording> decodeRecording(std::span<const std::uint8_t> bytes, std::stri
     std::string why;
     SensorFrame frame;
     CalibrationRecord calibration;
+    VoiceRecord voice;
     bool good = false;
     if (f.type == kTypeFrame) {
       good = readFrame(r, frame, station_count, why);
     } else if (f.type == kTypeCalibration) {
       good = readCalibration(r, calibration, station_count, why);
+    } else if (f.type == kTypeVoice) {
+      good = readVoice(r, voice, why);
     } else {
       why = f.type == kTypeHeader ? std::string("a second header record")
                                   : fmt::format("unknown record type {}", f.type);
@@ -456,6 +490,8 @@ Result<Recording> decodeRecording(std::span<const std::uint8_t> bytes, std::stri
       skip(end, std::move(why));
     } else if (f.type == kTypeFrame) {
       rec.frames.push_back(frame);
+    } else if (f.type == kTypeVoice) {
+      rec.voice.push_back(std::move(voice));
     } else {
       rec.calibrations.push_back(std::move(calibration));
       rec.calibration_after.push_back(rec.frames.size());
@@ -492,6 +528,24 @@ Result<std::unique_ptr<RecordingWriter>> RecordingWriter::create(const std::stri
   return w;
 }
 
+Result<std::unique_ptr<RecordingWriter>> RecordingWriter::appendTo(const std::string& path) {
+  std::unique_ptr<RecordingWriter> w(new RecordingWriter());
+  w->path_ = path;
+  w->fd_ = ::open(path.c_str(), O_RDWR | O_APPEND | O_CLOEXEC);
+  if (w->fd_ < 0) return fail("{}: cannot open the recording: {}", path, std::strerror(errno));
+  std::uint8_t head[kFileHeaderSize];
+  if (::pread(w->fd_, head, sizeof head, 0) != static_cast<ssize_t>(sizeof head) ||
+      std::memcmp(head, kMagic, sizeof kMagic) != 0) {
+    return fail("{}: not a recording (no file header) to append to", path);
+  }
+  std::memcpy(&w->version_, head + 8, 4);
+  if (recordingStationCount(w->version_) == 0) {
+    return fail("{}: recording format version {} (this build writes 1 or 2)", path, w->version_);
+  }
+  w->buffer_.reserve(4096);
+  return w;
+}
+
 RecordingWriter::~RecordingWriter() {
   if (fd_ >= 0) ::close(fd_);
 }
@@ -513,6 +567,7 @@ Status RecordingWriter::writeRecord() {
 }
 
 Status RecordingWriter::append(const SensorFrame& frame) {
+  std::lock_guard lock(mutex_);
   encodeFrameRecord(frame, buffer_, version_);
   if (Status s = writeRecord(); !s) return s;
   ++frames_;
@@ -520,8 +575,21 @@ Status RecordingWriter::append(const SensorFrame& frame) {
 }
 
 Status RecordingWriter::appendCalibration(const CalibrationRecord& record) {
+  std::lock_guard lock(mutex_);
   encodeCalibrationRecord(record, buffer_, version_);
   return writeRecord();
+}
+
+Status RecordingWriter::appendVoice(double time, std::span<const std::uint8_t> packet) {
+  if (packet.empty() || packet.size() > kRecordingMaxVoicePacket || !std::isfinite(time)) {
+    return fail("{}: voice packet of {} bytes at time {}: not recordable", path_, packet.size(),
+                time);
+  }
+  std::lock_guard lock(mutex_);
+  encodeVoiceRecord(time, packet, buffer_);
+  if (Status s = writeRecord(); !s) return s;
+  ++voice_;
+  return {};
 }
 
 Status RecordingWriter::sync() {

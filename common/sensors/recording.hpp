@@ -8,11 +8,19 @@
 //                payload (crc32 from common/base/bytes.hpp)
 // Record types: 1 header (must come first: participant, sensor map, optional calibration,
 // the sensors config text), 2 frame (one SensorFrame, fixed size), 3 calibration (a
-// calibration taken during the session: its window and the averaged readings).
+// calibration taken during the session: its window and the averaged readings), 4 voice
+// (one 20 ms Opus packet of the participant's voice as the client sent it: f64 capture
+// time of the frame's first sample on the recording's sensor clock, the clock of
+// SensorFrame::time; u16 packet bytes, 1..kRecordingMaxVoicePacket; the packet). Voice
+// records sit between the frames in the order they were captured; a muted or silent
+// stretch has none (the replay speaks silence there). How a client maps its voice clock
+// onto the sensor clock: client/app/sensor_input.hpp.
 // Versions: 1 stores four stations (head, chest, wrists) in every frame and calibration;
 // 2 stores six (the feet too). The writer writes version 1 unless the header's sensor map
 // names a foot station, so four-station files are what they always were; the reader reads
-// both (a version 1 file's foot stations read as not valid).
+// both (a version 1 file's foot stations read as not valid). Voice records need no new
+// version (they come in either): a build older than them skips each one as a damaged
+// stretch ("unknown record type 4") and replays the motion without the voice.
 //
 // The writer appends each record with a single write() on an O_APPEND descriptor, so a
 // process killed mid-write loses at most the record being written. The reader keeps every
@@ -23,8 +31,10 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <span>
 #include <string>
@@ -42,6 +52,7 @@ inline constexpr std::uint32_t kRecordingVersionFourStations = 1;  // no foot st
 // Stations per frame and calibration record in a format version (1: 4, 2: 6), 0 if unknown.
 int recordingStationCount(std::uint32_t version);
 inline constexpr std::size_t kRecordingMaxPayload = 1u << 20;
+inline constexpr std::size_t kRecordingMaxVoicePacket = 1275;  // Opus's largest packet
 
 // Which tracker station was worn where, and which gloves were on.
 struct SensorMapEntry {
@@ -62,6 +73,12 @@ struct CalibrationRecord {
   std::string pose;  // "standard" (arms down) or a description, e.g. "clip frame 0"
   std::array<StationReading, kBodySiteCount> stations{};
   std::array<GloveReading, kHandCount> gloves{};
+};
+
+// One 20 ms voice packet (Opus, 48 kHz mono, as common/voice/opus_voice encodes it).
+struct VoiceRecord {
+  double time = 0.0;                 // capture time of its first sample, sensor clock (s)
+  std::vector<std::uint8_t> packet;  // 1..kRecordingMaxVoicePacket bytes
 };
 
 struct RecordingHeader {
@@ -89,6 +106,7 @@ struct Recording {
   std::vector<SensorFrame> frames;
   std::vector<CalibrationRecord> calibrations;  // taken during the session, in order
   std::vector<std::size_t> calibration_after;   // frames recorded before each calibration
+  std::vector<VoiceRecord> voice;               // the voice track, in file order (may be empty)
   bool complete = true;                         // every byte was a good record (damage empty)
   std::vector<RecordingDamage> damage;          // skipped stretches, in file order, disjoint
   std::uint64_t skipped_bytes = 0;              // sum of damage[].bytes
@@ -102,8 +120,8 @@ struct Recording {
 // even the file header and the header record are intact; otherwise returns every good
 // record of the file, with complete = false and the damage listed when some bytes had to be
 // skipped. Cost: linear in the file for intact records; a damaged stretch is rescanned byte
-// by byte, with a CRC-32 over a record's length only where the bytes hold a frame or
-// calibration record's exact size and type (rare in damage; at worst about a record's
+// by byte, with a CRC-32 over a record's length only where the bytes hold a frame,
+// calibration or voice record's size and type (rare in damage; at worst about a record's
 // length of work per damaged byte).
 Result<Recording> decodeRecording(std::span<const std::uint8_t> bytes, std::string_view source);
 Result<Recording> loadRecording(const std::string& path);
@@ -122,12 +140,21 @@ void encodeFrameRecord(const SensorFrame& frame, std::vector<std::uint8_t>& out,
                        std::uint32_t version = kRecordingVersionFourStations);
 void encodeCalibrationRecord(const CalibrationRecord& record, std::vector<std::uint8_t>& out,
                              std::uint32_t version = kRecordingVersionFourStations);
+// The same in every version. The packet must hold 1..kRecordingMaxVoicePacket bytes (the
+// caller's check; appendVoice makes it).
+void encodeVoiceRecord(double time, std::span<const std::uint8_t> packet,
+                       std::vector<std::uint8_t>& out);
 
 class RecordingWriter {
  public:
   // Creates (truncates) the file and writes the file header and the header record.
   static Result<std::unique_ptr<RecordingWriter>> create(const std::string& path,
                                                          const RecordingHeader& header);
+  // Opens an existing recording (its file header checked) to append more records at its
+  // end, e.g. the voice beside the writer that a PostureSource owns: each record is one
+  // write() on an O_APPEND descriptor, which Linux never interleaves with another
+  // descriptor's on a regular file, so both writers' records stay whole.
+  static Result<std::unique_ptr<RecordingWriter>> appendTo(const std::string& path);
   ~RecordingWriter();
   RecordingWriter(const RecordingWriter&) = delete;
   RecordingWriter& operator=(const RecordingWriter&) = delete;
@@ -135,20 +162,27 @@ class RecordingWriter {
   // One record per call, one write() each; allocation-free after the first frame.
   Status append(const SensorFrame& frame);
   Status appendCalibration(const CalibrationRecord& record);
+  // A voice packet captured at `time` (the sensor clock, seconds). Errors: an empty or
+  // oversized packet, a non-finite time, a failed write. May be called from another thread
+  // than append() (records never interleave: the writer serialises them).
+  Status appendVoice(double time, std::span<const std::uint8_t> packet);
   // Forces the data to the disk (fdatasync), beyond what a process crash needs.
   Status sync();
   std::uint64_t framesWritten() const { return frames_; }
+  std::uint64_t voiceWritten() const { return voice_; }
   const std::string& path() const { return path_; }
 
  private:
   RecordingWriter() = default;
   Status writeRecord();
 
+  std::mutex mutex_;  // one record at a time (frames and voice come from two threads)
   int fd_ = -1;
   std::uint32_t version_ = kRecordingVersionFourStations;
   std::string path_;
   std::vector<std::uint8_t> buffer_;
-  std::uint64_t frames_ = 0;
+  std::atomic<std::uint64_t> frames_{0};
+  std::atomic<std::uint64_t> voice_{0};
 };
 
 // Replays a recording's frames in order (as fast as polled; the frames keep their times):

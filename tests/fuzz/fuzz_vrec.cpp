@@ -4,12 +4,13 @@
 // (complete <=> no damage <=> no stop reason; the damaged stretches inside the file, in
 // order, apart, adding up to skipped_bytes, the first at stop_offset; calibrations placed
 // between frames, finite times, unit orientations on valid stations, glove angles within
-// 10 rad), and re-encoding it record by record gives a complete recording that encodes to
-// the same bytes again.
+// 10 rad, voice packets of 1..1275 bytes at finite times), and re-encoding it record by
+// record gives a complete recording that encodes to the same bytes again.
 //
 // Every record carries a CRC-32, so the custom mutator repairs the checksums of most
 // mutants (fuzz_support.hpp). Seeds: small recordings written by the recording encoders,
-// one cut short and one with a damaged record in the middle (the resynchronisation).
+// one with a voice track, one cut short and one with a damaged record in the middle (the
+// resynchronisation).
 #include <cmath>
 #include <cstdint>
 #include <span>
@@ -90,6 +91,11 @@ std::vector<fuzz::Seed> makeSeeds() {
   for (int k = 0; k < 3; ++k) encodeFrameRecord(sampleFrame(k), plain);
   encodeCalibrationRecord(sampleCalibration(), plain);
   encodeFrameRecord(sampleFrame(3), plain);
+  std::vector<std::uint8_t> voiced = plain;  // a voice track between and after the frames
+  const std::uint8_t opus[] = {0x78, 0x01, 0x02, 0x03, 0xfe, 0x55};
+  encodeVoiceRecord(0.02, opus, voiced);
+  encodeFrameRecord(sampleFrame(4), voiced);
+  encodeVoiceRecord(0.04, std::span<const std::uint8_t>(opus).first(3), voiced);
 
   header.calibration = sampleCalibration();
   std::vector<std::uint8_t> calibrated;
@@ -102,6 +108,7 @@ std::vector<fuzz::Seed> makeSeeds() {
   check(decodeRecording(header_only, "seed")->complete, "a seed decodes");
   check(decodeRecording(plain, "seed")->frames.size() == 4, "a seed decodes");
   check(decodeRecording(calibrated, "seed")->header.calibration.has_value(), "a seed decodes");
+  check(decodeRecording(voiced, "seed")->voice.size() == 2, "a seed decodes");
   std::vector<std::uint8_t> damaged = plain;  // a byte of the second frame overwritten
   const std::size_t second_frame = header_only.size() + (plain.size() - header_only.size()) / 5;
   damaged[second_frame + 30] ^= 0x5a;
@@ -112,6 +119,7 @@ std::vector<fuzz::Seed> makeSeeds() {
   return {{"header_only.vrec", header_only},
           {"frames_and_calibration.vrec", plain},
           {"header_calibration.vrec", calibrated},
+          {"voice_track.vrec", voiced},
           {"cut_short.vrec", cut},
           {"damaged_middle.vrec", damaged}};
 }
@@ -149,6 +157,7 @@ std::vector<std::uint8_t> encode(const Recording& rec) {
     }
     if (f < rec.frames.size()) encodeFrameRecord(rec.frames[f], out);
   }
+  for (const VoiceRecord& v : rec.voice) encodeVoiceRecord(v.time, v.packet, out);
   return out;
 }
 
@@ -208,12 +217,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (const GloveReading& g : f.gloves) checkGlove(g);
   }
 
+  for (const VoiceRecord& v : rec->voice) {
+    check(std::isfinite(v.time) && !v.packet.empty() && v.packet.size() <= kRecordingMaxVoicePacket,
+          "voice packets of 1..1275 bytes at finite times");
+  }
+
   // Round trip: the kept records encode to a complete recording that re-encodes the same.
   const std::vector<std::uint8_t> encoded = encode(*rec);
   Result<Recording> again = decodeRecording(encoded, "again.vrec");
   check(again.ok() && again->complete, "the kept records re-encode to a complete recording");
   check(again->frames.size() == rec->frames.size() &&
-            again->calibrations.size() == rec->calibrations.size(),
+            again->calibrations.size() == rec->calibrations.size() &&
+            again->voice.size() == rec->voice.size(),
         "the round trip keeps every record");
   check(encode(*again) == encoded, "decode(encode(recording)) encodes the same");
   return 0;
