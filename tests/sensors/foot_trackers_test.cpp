@@ -205,14 +205,16 @@ Score scoreClip(const ClipBody& body, bool feet) {
 
 // The four-station figures of these clips before foot trackers existed (the same build of
 // the solver, simulator and metrics): the six-station support changes nothing for them.
+// (Re-pinned when the station filter's corrections became minimum-jerk over two reading
+// intervals; the foot support was not touched.)
 struct Before {
   const char* clip;
   double upper_m, all_m;
   bool walking;  // the legs move (CMU); else a standing gesture clip
 };
 constexpr Before kBefore[] = {
-    {"mocap/cmu/01_01.bvh", 0.017292277086, 0.040201417725, true},
-    {"mocap/gestures/dataset-1_call_normal_001.bvh", 0.004116287901, 0.007175758542, false},
+    {"mocap/cmu/01_01.bvh", 0.022140344524, 0.044243328249, true},
+    {"mocap/gestures/dataset-1_call_normal_001.bvh", 0.005716440182, 0.008097216539, false},
 };
 
 TEST(FootTrackers, FourStationsUnchangedAndSixFollowTheLegs) {

@@ -1,8 +1,11 @@
 // Smoothness of the solved motion on every shared clip (issue 21): through the simulated rig
 // with the default tracker noise and the default (Kalman) station filter, no joint's largest
 // frame-to-frame jump exceeds 1.5 times the clip's own largest (no pops from the shared update
-// rate, IK branch flips or swivel flips), and on the conversation clips the upper body does not
-// trail the clip by more than one sensor frame. Skips when ../shared is absent.
+// rate, IK branch flips or swivel flips), the jitter (mean |jerk| of the joints, solved / clip)
+// stays at or below what the solver reached (bench_posture; issue 21's target of 1.5 is met on
+// none of the gesture clips, see the README), and on the conversation clips the upper body
+// does not trail the clip by more than one sensor frame and is within 1 cm. Skips when
+// ../shared is absent.
 #include <cctype>
 #include <string>
 
@@ -14,10 +17,16 @@
 namespace vistel {
 namespace {
 
-class SharedClipSmoothness : public ::testing::TestWithParam<const char*> {};
+struct ClipCase {
+  const char* path;   // under mocap/
+  double max_jitter;  // solved / clip, default noise: about 1.1 x what was measured
+};
+
+class SharedClipSmoothness : public ::testing::TestWithParam<ClipCase> {};
 
 TEST_P(SharedClipSmoothness, NoPopsAndLittleLag) {
-  VISTEL_REQUIRE_SHARED(path, std::string("mocap/") + GetParam());
+  const ClipCase& clip = GetParam();
+  VISTEL_REQUIRE_SHARED(path, std::string("mocap/") + clip.path);
   auto body = loadClipBody(path);
   ASSERT_TRUE(body.ok()) << body.error().message;
   const ClipSolveOptions options;  // default noise, default filter
@@ -29,27 +38,32 @@ TEST_P(SharedClipSmoothness, NoPopsAndLittleLag) {
   EXPECT_GT(m.max_jump_truth_m, 0.0);
   EXPECT_LE(m.jumpRatio(), 1.5) << "largest jump " << m.max_jump_solved_m * 100.0
                                 << " cm against the clip's " << m.max_jump_truth_m * 100.0 << " cm";
+  EXPECT_LE(m.jitterRatio(), clip.max_jitter);
   // Lag: at most one 120 Hz sensor frame on the conversation clips; the walking and jumping
   // (CMU) clips trail by more (bench_posture reports the figures; issue 21 keeps it open).
-  if (std::string(GetParam()).rfind("gestures/", 0) == 0) {
+  if (std::string(clip.path).rfind("gestures/", 0) == 0) {
     EXPECT_LT(m.lag_s, 1.0 / 120.0) << "lag " << m.lag_s * 1e3 << " ms";
+    EXPECT_LT(m.mpjpe_upper_m, 0.01);
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Clips, SharedClipSmoothness,
-                         ::testing::Values("gestures/dataset-1_bow_normal_001.bvh",
-                                           "gestures/dataset-1_call_normal_001.bvh",
-                                           "gestures/dataset-2_wave-right-hand_normal_001.bvh",
-                                           "cmu/01_01.bvh", "cmu/131_01.bvh", "cmu/131_02.bvh",
-                                           "cmu/scaled_131_03.bvh"),
-                         [](const ::testing::TestParamInfo<const char*>& param) {
-                           std::string name = param.param;
-                           name = name.substr(name.find('/') + 1);
-                           name = name.substr(0, name.find('.'));
-                           for (char& c : name)
-                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-                           return name;
-                         });
+// Measured with the default noise (bench_posture): bow 5.79, call 4.24, wave 2.18; CMU
+// 01_01 0.59, 131_01 2.46, 131_02 3.38, scaled_131_03 3.51.
+INSTANTIATE_TEST_SUITE_P(
+    Clips, SharedClipSmoothness,
+    ::testing::Values(ClipCase{"gestures/dataset-1_bow_normal_001.bvh", 6.4},
+                      ClipCase{"gestures/dataset-1_call_normal_001.bvh", 4.7},
+                      ClipCase{"gestures/dataset-2_wave-right-hand_normal_001.bvh", 2.4},
+                      ClipCase{"cmu/01_01.bvh", 0.7}, ClipCase{"cmu/131_01.bvh", 2.7},
+                      ClipCase{"cmu/131_02.bvh", 3.7}, ClipCase{"cmu/scaled_131_03.bvh", 3.9}),
+    [](const ::testing::TestParamInfo<ClipCase>& param) {
+      std::string name = param.param.path;
+      name = name.substr(name.find('/') + 1);
+      name = name.substr(0, name.find('.'));
+      for (char& c : name)
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+      return name;
+    });
 
 }  // namespace
 }  // namespace vistel
