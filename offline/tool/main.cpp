@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
   vistel::registerDeformCommand(app);
   vistel::registerCompareCommand(app);
   vistel::registerCutCommand(app);
+  vistel::registerSynthesizeCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

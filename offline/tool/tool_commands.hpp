@@ -32,6 +32,8 @@ void registerDeformCommand(CLI::App& app);
 void registerCompareCommand(CLI::App& app);
 // vistel-avatar cut AVATAR [--band M] -o DIR [--format obj|ply] [--config DIR]
 void registerCutCommand(CLI::App& app);
+// vistel-avatar synthesize PARTS.toml -o OUT.glb [--source AVATAR] [--ring-spacing M]
+void registerSynthesizeCommand(CLI::App& app);
 
 // Fits `avatar`'s implicit model (build_command.cpp; shared with deform): the joint map that
 // fits its skeleton from <config>/skeletons, the primitive map from `primitives`. progress
