@@ -20,6 +20,11 @@ namespace {
 // skeleton (metres) are a deeper layer (see fitSkinWeights).
 constexpr float kLayerGap = 0.005f;
 
+// Weighted least-squares rounds of a skin weight grid, and how far (metres) a vertex may
+// stay outside the skin surface it fits (see fitSkinWeights).
+constexpr int kEnclosingRounds = 4;
+constexpr float kEnclosingTolerance = 0.001f;
+
 // Field slope at a primitive's surface (per metre), for free vertices it owns.
 float surfaceSlope(const PrimitiveSet& set, const PosedPrimitive& p, const Primitive& q) {
   float fp = 0.0f;
@@ -32,20 +37,43 @@ float surfaceSlope(const PrimitiveSet& set, const PosedPrimitive& p, const Primi
 
 }  // namespace
 
-void fitSkinWeights(ImplicitModel& model, std::span<const glm::vec3> pos, int samples) {
+void fitSkinWeights(ImplicitModel& model, std::span<const glm::vec3> pos,
+                    std::span<const std::uint8_t> demoted, int samples) {
   const Calibration& c = model.calibration;
   std::vector<std::uint32_t> own;
+  std::vector<float> target;  // (own) the weight each own vertex asks for
+  std::vector<float> enough;  // (own) the least weight that keeps a partner out of it
   for (std::size_t i = 0; i < model.primitives.items.size(); ++i) {
     Primitive& p = model.primitives.items[i];
     SkinWeightGrid& g = p.skin_weight;
     g = SkinWeightGrid{};
+    // The vertices the primitive defines (limb and joint vertices, and those demoted for a
+    // weak field at rest, which still move with it), each with the weight that puts this
+    // primitive's own iso-surface through it: w = T / F_i(P_rest) (a joint or bone vertex's
+    // w_v calibrates the sum D_v, not F_i alone), at most kMaxSkinWeight. Other free vertices
+    // (fingers, toes) move with bones the primitive does not follow.
+    const PosedPrimitive rest = posePrimitive(p, glm::mat4(1.0f));
     own.clear();
+    target.clear();
+    enough.clear();
     for (std::uint32_t v = 0; v < c.prims.size(); ++v) {
-      if (c.vertex_class[v] != VertexClass::kFree && c.prims[v][0] == static_cast<int>(i))
-        own.push_back(v);
+      if (c.prims[v][0] != static_cast<int>(i)) continue;
+      if (c.vertex_class[v] == VertexClass::kFree && (v >= demoted.size() || demoted[v] == 0))
+        continue;
+      const float f = primitiveField(rest, pos[v]);
+      if (!(f > 0.0f)) continue;
+      own.push_back(v);
+      target.push_back(std::min(model.primitives.iso / f, kMaxSkinWeight));
+      // The weight that leaves the vertex kEnclosingTolerance outside the skin surface.
+      float scale;
+      const glm::vec3 d = skeletonOffset(rest.shape, pos[v], scale);
+      const float len = glm::length(d);
+      const glm::vec3 deeper =
+          len > kEnclosingTolerance ? pos[v] - (kEnclosingTolerance / len) * d : pos[v];
+      enough.push_back(
+          std::min(model.primitives.iso / primitiveField(rest, deeper), target.back()));
     }
     if (own.empty() || samples < 2) continue;
-    const PosedPrimitive rest = posePrimitive(p, glm::mat4(1.0f));
     g.box = rest.bounds;
     g.n = std::min(samples, kMaxSkinWeightSamples);
     const int n = g.n;
@@ -61,23 +89,35 @@ void fitSkinWeights(ImplicitModel& model, std::span<const glm::vec3> pos, int sa
     Eigen::VectorXd rhs = Eigen::VectorXd::Zero(cells);
     const glm::vec3 size = g.box.max - g.box.min;
     const float last = static_cast<float>(n - 1);
-    const auto add = [&](const glm::vec3& q, double value) {
+    // The eight samples around bind-space point q and their trilinear weights.
+    const auto corners = [&](const glm::vec3& q, Eigen::Index* idx, double* wt) {
       const glm::vec3 u =
           glm::clamp((q - g.box.min) / size * last, glm::vec3(0.0f), glm::vec3(last));
       const glm::ivec3 i0 = glm::min(glm::ivec3(u), glm::ivec3(n - 2));
       const glm::vec3 t = u - glm::vec3(i0);
-      Eigen::Index idx[8];
-      double wt[8];
       for (int k = 0; k < 8; ++k) {
         const int dx = k & 1, dy = (k >> 1) & 1, dz = (k >> 2) & 1;
         idx[k] = index(i0.x + dx, i0.y + dy, i0.z + dz);
         wt[k] = static_cast<double>(dx != 0 ? t.x : 1.0f - t.x) * (dy != 0 ? t.y : 1.0f - t.y) *
                 (dz != 0 ? t.z : 1.0f - t.z);
       }
+    };
+    const auto add = [&](const glm::vec3& q, double value, double weight) {
+      Eigen::Index idx[8];
+      double wt[8];
+      corners(q, idx, wt);
       for (int a = 0; a < 8; ++a) {
-        rhs[idx[a]] += wt[a] * value;
-        for (int b = 0; b < 8; ++b) terms.emplace_back(idx[a], idx[b], wt[a] * wt[b]);
+        rhs[idx[a]] += weight * wt[a] * value;
+        for (int b = 0; b < 8; ++b) terms.emplace_back(idx[a], idx[b], weight * wt[a] * wt[b]);
       }
+    };
+    const auto interpolate = [&](const Eigen::VectorXd& x, const glm::vec3& q) {
+      Eigen::Index idx[8];
+      double wt[8];
+      corners(q, idx, wt);
+      double sum = 0.0;
+      for (int a = 0; a < 8; ++a) sum += wt[a] * x[idx[a]];
+      return sum;
     };
     // A partner meets the outermost skin on each ray: where rays of several layers share a
     // sample (lips over teeth, lids over eyes), the deeper layers are left out.
@@ -97,40 +137,78 @@ void fitSkinWeights(ImplicitModel& model, std::span<const glm::vec3> pos, int sa
       float& o = outermost[nearest(keys[k])];
       o = std::max(o, depth[k]);
     }
+    std::vector<double> fit_weight(own.size());  // (own) each vertex's least-squares weight
     for (std::size_t k = 0; k < own.size(); ++k) {
-      if (depth[k] < outermost[nearest(keys[k])] - kLayerGap) continue;
-      add(keys[k], c.w[own[k]]);
+      fit_weight[k] = depth[k] < outermost[nearest(keys[k])] - kLayerGap ? 0.0 : 1.0;
     }
     const double membrane = 1e-2 * static_cast<double>(own.size()) / static_cast<double>(cells);
-    for (int z = 0; z < n; ++z) {
-      for (int y = 0; y < n; ++y) {
-        for (int x = 0; x < n; ++x) {
-          const Eigen::Index a = index(x, y, z);
-          const Eigen::Index next[3] = {x + 1 < n ? index(x + 1, y, z) : -1,
-                                        y + 1 < n ? index(x, y + 1, z) : -1,
-                                        z + 1 < n ? index(x, y, z + 1) : -1};
-          for (const Eigen::Index b : next) {
-            if (b < 0) continue;
-            terms.emplace_back(a, a, membrane);
-            terms.emplace_back(b, b, membrane);
-            terms.emplace_back(a, b, -membrane);
-            terms.emplace_back(b, a, -membrane);
+    // Rounds of weighted least squares, each weighing more the vertices the last one left
+    // outside the skin surface (w short of theirs), so the fit leans towards enclosing the
+    // skin without lifting it everywhere.
+    Eigen::VectorXd solved = Eigen::VectorXd::Ones(cells);
+    for (int round = 0; round < kEnclosingRounds; ++round) {
+      terms.clear();
+      rhs.setZero();
+      for (std::size_t k = 0; k < own.size(); ++k) {
+        if (fit_weight[k] > 0.0) add(keys[k], target[k], fit_weight[k]);
+      }
+      for (int z = 0; z < n; ++z) {
+        for (int y = 0; y < n; ++y) {
+          for (int x = 0; x < n; ++x) {
+            const Eigen::Index a = index(x, y, z);
+            const Eigen::Index next[3] = {x + 1 < n ? index(x + 1, y, z) : -1,
+                                          y + 1 < n ? index(x, y + 1, z) : -1,
+                                          z + 1 < n ? index(x, y, z + 1) : -1};
+            for (const Eigen::Index b : next) {
+              if (b < 0) continue;
+              terms.emplace_back(a, a, membrane);
+              terms.emplace_back(b, b, membrane);
+              terms.emplace_back(a, b, -membrane);
+              terms.emplace_back(b, a, -membrane);
+            }
           }
         }
       }
+      Eigen::SparseMatrix<double> normal(cells, cells);
+      normal.setFromTriplets(terms.begin(), terms.end());
+      Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> cg;
+      cg.setTolerance(1e-8);
+      cg.compute(normal);
+      solved = cg.solveWithGuess(rhs, solved);
+      for (std::size_t k = 0; k < own.size(); ++k) {
+        if (interpolate(solved, keys[k]) < static_cast<double>(enough[k])) {
+          fit_weight[k] = std::max(fit_weight[k], 1.0) * 4.0;
+        }
+      }
     }
-    Eigen::SparseMatrix<double> normal(cells, cells);
-    normal.setFromTriplets(terms.begin(), terms.end());
-    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> cg;
-    cg.setTolerance(1e-8);
-    cg.compute(normal);
-    const Eigen::VectorXd solved = cg.solveWithGuess(rhs, Eigen::VectorXd::Ones(cells));
     g.values.resize(static_cast<std::size_t>(cells));
-    g.max_value = kMinSkinWeight;
     for (Eigen::Index k = 0; k < cells; ++k) {
       const double x = std::isfinite(solved[k]) ? solved[k] : 1.0;
-      const float value = std::clamp(static_cast<float>(x), kMinSkinWeight, kMaxSkinWeight);
-      g.values[static_cast<std::size_t>(k)] = value;
+      g.values[static_cast<std::size_t>(k)] = std::max(static_cast<float>(x), kMinSkinWeight);
+    }
+    // The least-squares skin passes through the vertices on average; a partner (a rigid
+    // ball) must not sink into any of them: raise the samples around each key whose
+    // interpolated weight falls short of its vertex's, by the least change (along the
+    // trilinear weights) that makes it exact. Raising only ever lifts the others, so one
+    // pass leaves every vertex on or inside the skin surface (up to the upper clamp). A
+    // deeper layer asks for less than the skin above it, so it changes nothing here.
+    for (std::size_t k = 0; k < own.size(); ++k) {
+      const float deficit = enough[k] - skinWeightAt(g, keys[k]);
+      if (!(deficit > 0.0f)) continue;
+      Eigen::Index idx[8];
+      double wt[8];
+      corners(keys[k], idx, wt);
+      double norm2 = 0.0;
+      for (const double x : wt) norm2 += x * x;
+      if (!(norm2 > 0.0)) continue;
+      for (int a = 0; a < 8; ++a) {
+        g.values[static_cast<std::size_t>(idx[a])] +=
+            static_cast<float>(static_cast<double>(deficit) * wt[a] / norm2) * 1.0001f;
+      }
+    }
+    g.max_value = kMinSkinWeight;
+    for (float& value : g.values) {
+      value = std::clamp(value, kMinSkinWeight, kMaxSkinWeight);
       g.max_value = std::max(g.max_value, value);
     }
   }
@@ -157,6 +235,7 @@ Result<CalibrationReport> calibrateModel(ImplicitModel& model, std::span<const g
 
   const float iso = set.iso;
   CalibrationReport report;
+  std::vector<std::uint8_t> demoted(nv, 0);  // (nvert) made free for a weak field at rest
   c.w.assign(nv, 1.0f);
   c.slope.assign(nv, 0.0f);
   if (c.rigid.size() != nv) c.rigid.assign(nv, 0);
@@ -186,6 +265,7 @@ Result<CalibrationReport> calibrateModel(ImplicitModel& model, std::span<const g
         c.vertex_class[v] = VertexClass::kFree;
         pr[1] = pr[2] = pr[3] = kNoPrimitive;
         c.rigid[v] = 0;
+        demoted[v] = 1;
         ++report.demoted;
       }
     }
@@ -204,7 +284,7 @@ Result<CalibrationReport> calibrateModel(ImplicitModel& model, std::span<const g
   }
   // The skins' weights around their primitives, then the rest contacts measured against
   // them (a partner meets a primitive's skin where w_i F_i = T).
-  fitSkinWeights(model, pos);
+  fitSkinWeights(model, pos, demoted);
   for (std::size_t i = 0; i < np; ++i) rest.items[i] = posePrimitive(set.items[i], glm::mat4(1.0f));
   for (std::size_t v = 0; v < nv; ++v) {
     const auto& pr = c.prims[v];

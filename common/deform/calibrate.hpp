@@ -7,6 +7,7 @@
 // Runtime code (props build their models at run time); the offline builder calls it too.
 #pragma once
 
+#include <cstdint>
 #include <span>
 
 #include <glm/glm.hpp>
@@ -41,17 +42,21 @@ Result<CalibrationReport> calibrateModel(ImplicitModel& model,
                                          std::span<const glm::vec3> rest_normals,
                                          const FieldCalibrationOptions& options = {});
 
-// Fits every primitive's skin weight grid (Primitive::skin_weight) to the weights w_v of
-// the vertices it defines (limb and joint vertices with p0 = it): samples^3 values over its
-// support box at rest, by least squares so that the grid's trilinear interpolation
-// reproduces w_v at those vertices' keys (skinWeightKey: w is looked up where a point's ray
-// from the skeleton crosses a fixed shell, so it is constant along each ray), with a small
-// membrane term that keeps neighbouring
-// samples close and fills those no vertex is near; clamped to [kMinSkinWeight,
-// kMaxSkinWeight]. A primitive that defines no vertex gets none (w = 1). calibrateModel
-// calls it.
+// Fits every primitive's skin weight grid (Primitive::skin_weight) so that its skin
+// w_i F_i = T passes through, or just outside, the vertices it defines (limb and joint
+// vertices with p0 = it, and free ones flagged in `demoted` (nvert, or empty): those made
+// free for a weak field at rest, which still move with it): each asks for
+// w = T / F_i(P_rest). samples^3 values over its support box at rest, by weighted least
+// squares of the grid's trilinear interpolation at those vertices' keys (skinWeightKey: w is
+// looked up where a point's ray from the skeleton crosses a fixed shell, so it is constant
+// along each ray) with a small membrane term that keeps neighbouring samples close and fills
+// those no vertex is near; rounds that weigh more the vertices left outside, then a last
+// pass raising the samples around any vertex still short, so a partner (a rigid ball)
+// meets the skin before it sinks into it. Clamped to [kMinSkinWeight, kMaxSkinWeight]. A
+// primitive that defines no vertex gets none (w = 1). calibrateModel calls it. Cost: a few
+// sparse solves of samples^3 unknowns per primitive (offline).
 void fitSkinWeights(ImplicitModel& model, std::span<const glm::vec3> rest_positions,
-                    int samples = 16);
+                    std::span<const std::uint8_t> demoted = {}, int samples = 16);
 
 // Tangential relaxation weights (Vaillant et al. 2013): for each vertex, its one-ring
 // and mean-value coordinates of the vertex in the ring projected on its tangent plane

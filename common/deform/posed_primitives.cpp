@@ -1,6 +1,8 @@
 #include "common/deform/posed_primitives.hpp"
 
+#include <algorithm>
 #include <cassert>
+#include <cmath>
 
 #include <glm/gtc/matrix_inverse.hpp>
 
@@ -24,6 +26,30 @@ PosedPrimitive posePrimitive(const Primitive& p, const glm::mat4& xform) {
     out.to_bind = glm::affineInverse(xform);
   }
   return out;
+}
+
+float skinSurfaceDistance(const PosedPrimitive& p, float w) {
+  if (w == 1.0f) return p.surface;
+  // T / (w W) = f(r_in / r_out) / w: the profile's value at the skin on this ray.
+  const float r_out = 1.0f / p.inv_r_out;
+  const float target = densityValue(p.density, p.surface * p.inv_r_out) / w;
+  if (!(target < 1.0f)) return 0.0f;
+  if (!(target > 0.0f)) return r_out;
+  double u = 0.0;
+  if (densityInverseSquared(p.density, target, u)) {
+    return r_out * static_cast<float>(std::sqrt(std::clamp(u, 0.0, 1.0)));
+  }
+  // Any other profile: bisection on the decreasing f(r).
+  float lo = 0.0f, hi = 1.0f;
+  for (int i = 0; i < 40; ++i) {
+    const float mid = 0.5f * (lo + hi);
+    if (densityValue(p.density, mid) > target) {
+      lo = mid;
+    } else {
+      hi = mid;
+    }
+  }
+  return r_out * 0.5f * (lo + hi);
 }
 
 void posePrimitives(const PrimitiveSet& set, std::span<const glm::mat4> skin_xforms,

@@ -102,6 +102,14 @@ inline float skinWeight(const PosedPrimitive& prim, const glm::vec3& p) {
   return skinWeight(prim, p, d, scale);
 }
 
+// The skeleton distance (skeleton-distance units, as `surface`) of the primitive's skin on a
+// ray whose skin weight is w (skinWeight): where w W f(s / r_out) = T. Without a grid (w = 1)
+// that is `surface`, the raw iso-surface at r_in; a calibrated primitive's skin lies farther
+// out where w > 1 and nearer where w < 1. 0 when w W <= T (no skin on the ray: the field
+// never reaches T). Cost: a few multiplications and one short Newton solve (the Wyvill
+// profile; others bisect).
+float skinSurfaceDistance(const PosedPrimitive& prim, float w);
+
 // Whether p lies in the primitive's world box (a cheap reject before primitiveField).
 inline bool inBounds(const PosedPrimitive& prim, const glm::vec3& p) {
   return p.x >= prim.bounds.min.x && p.x <= prim.bounds.max.x && p.y >= prim.bounds.min.y &&

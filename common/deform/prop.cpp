@@ -80,7 +80,39 @@ struct Touch {
   float core_depth = INFINITY;         // depth where the rigid core begins
 };
 
-// Contact of the ball (centre c, radius r) with one posed primitive's surface F_i = T.
+// Directions of the ball's lower cap sampled by capDepth: rings at these angles from the
+// point nearest the primitive's skeleton, kCapAzimuths points each.
+constexpr float kCapAngles[] = {0.1396f, 0.2793f, 0.4189f, 0.5585f, 0.6981f, 0.8378f};  // 8..48 deg
+constexpr int kCapAzimuths = 16;
+
+// How deep the deepest sampled point of the ball's cap facing the skeleton (direction
+// -normal) lies inside the primitive's skin, measured along that point's own ray from the
+// skeleton (metres; negative: all outside).
+float capDepth(const PosedPrimitive& p, const glm::vec3& c, float r, const glm::vec3& normal) {
+  const glm::vec3 helper =
+      std::abs(normal.x) < 0.9f ? glm::vec3(1.0f, 0.0f, 0.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
+  const glm::vec3 e1 = glm::normalize(glm::cross(normal, helper));
+  const glm::vec3 e2 = glm::cross(normal, e1);
+  float deepest = -INFINITY;
+  for (const float angle : kCapAngles) {
+    const float ca = std::cos(angle), sa = std::sin(angle);
+    for (int k = 0; k < kCapAzimuths; ++k) {
+      const float b = 2.0f * std::numbers::pi_v<float> * static_cast<float>(k) / kCapAzimuths;
+      const glm::vec3 q = c + r * (-ca * normal + sa * (std::cos(b) * e1 + std::sin(b) * e2));
+      float sc;
+      const glm::vec3 d = skeletonOffset(p.shape, q, sc);
+      // Skeleton units to metres: 1 for metric shapes, the local radius for cone-spheres.
+      const float units = sc > 0.0f ? 1.0f / sc : 1.0f;
+      const float w = skinWeight(p, q, d, sc);
+      const float depth = skinSurfaceDistance(p, w) * units - std::sqrt(glm::dot(d, d));
+      deepest = std::max(deepest, depth);
+    }
+  }
+  return deepest;
+}
+
+// Contact of the ball (centre c, radius r) with one posed primitive's skin: its iso-surface
+// w_i F_i = T, w_i the calibrated skin weight (the bare F_i = T without one).
 bool touchPrimitive(const PosedPrimitive& p, const glm::vec3& c, float r, float core_fraction,
                     Touch& t) {
   if (!p.collides) return false;
@@ -98,11 +130,19 @@ bool touchPrimitive(const PosedPrimitive& p, const glm::vec3& c, float r, float 
     scale = gl > 0.0f ? 1.0f / gl : std::max(p.shape.radius_a, p.shape.radius_b);
   }
   const float dist = s * scale;
-  const float r_s = p.surface * scale;
-  const float depth = r_s + r - dist;
+  // The surface the body's skin makes on the ray through the ball's centre (its calibrated
+  // skin weight there), so the ball meets the skin rather than the bare primitive.
+  const float r_s = skinSurfaceDistance(p, skinWeight(p, c)) * scale;
+  float depth = r_s + r - dist;
+  const glm::vec3 normal = gl > 0.0f ? g / gl : glm::vec3(0.0f, 1.0f, 0.0f);
+  // The skin is not an offset surface: where it stands out beside the centre's ray (a
+  // nose, a heel, a shoulder blade) the ball meets it first. Sample the ball's lower cap
+  // and take the deepest point inside the skin on its own ray.
+  if (p.skin_weight != nullptr && dist - r < p.reach)
+    depth = std::max(depth, capDepth(p, c, r, normal));
   if (!(depth > 0.0f)) return false;
   t.depth = depth;
-  t.normal = gl > 0.0f ? g / gl : glm::vec3(0.0f, 1.0f, 0.0f);
+  t.normal = normal;
   t.closest = c - dist * t.normal;
   t.reduced_radius = p.shape.kind == ShapeKind::kOffsetPolygon ? r : r * r_s / (r + r_s);
   t.core_depth = (1.0f - core_fraction) * r_s;

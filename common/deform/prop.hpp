@@ -4,9 +4,12 @@
 //
 // Ball dynamics (stepBall) use primitives only, no meshes, so a server that has just
 // skeletons, primitive sets and postures can step props: each posed primitive's surface is
-// its iso-surface F_i = T, the offset surface at skeleton distance r_in, so a ball of
-// radius R penetrates primitive i by depth = r_in + R - dist(centre, skeleton) (cone-
-// spheres: in their local profile scale), and the body pushes back along the field's
+// its skin, w_i F_i = T with w_i its calibrated skin weight (skinSurfaceDistance: the bare
+// iso-surface at r_in without one), so a ball of radius R penetrates primitive i by
+// depth = r_s + R - dist(centre, skeleton), r_s the skin's distance on the ray through the
+// centre (cone-spheres: in their local profile scale), or more where the skin stands out
+// beside that ray (the deepest of 96 points sampled on the ball's cap facing the skeleton,
+// each on its own ray), and the body pushes back along the field's
 // gradient direction with pressure k * depth over the contact disc's area (as Step 3
 // measures forces on meshes): F = k * depth * 2 pi R* depth, R* = R r_s / (R + r_s) with
 // r_s the primitive's local surface radius, k the two materials' stiffnesses in series;

@@ -70,7 +70,18 @@ Bounce dropOnHead(const Standing& s, float restitution, float drop) {
   ball.radius = 0.1f;
   ball.mass = 0.4f;
   ball.restitution = restitution;
-  const float y_touch = top.y + ball.radius;
+  // Where the ball coming straight down first touches the head's skin surface (its
+  // calibrated skin weight lifts it above the bare primitive's): probed with still steps.
+  const auto touches = [&](float y) {
+    BallState probe = ball;
+    probe.position = glm::vec3(top.x, y, top.z);
+    BallStepOptions still;
+    still.gravity = glm::vec3(0.0f);
+    still.floor = false;
+    return stepBall(probe, {&s.view, 1}, 1e-6f, still).contact_count > 0;
+  };
+  float y_touch = top.y + ball.radius + 0.15f;
+  while (y_touch > top.y && !touches(y_touch)) y_touch -= 0.001f;
   ball.position = glm::vec3(top.x, y_touch + drop, top.z);
   Bounce b;
   bool rising = false;
