@@ -85,9 +85,8 @@ void GpuLook::create(const AvatarLook& look, std::size_t index_count) {
       part.base_texture = has_uvs_ ? textureAt(m.base_color_texture) : 0u;
       part.normal_texture = has_uvs_ ? textureAt(m.normal_texture) : 0u;
       part.normal_scale = m.normal_scale;
-      part.alpha_cutoff = m.alpha_mode == AlphaMode::kMask    ? m.alpha_cutoff
-                          : m.alpha_mode == AlphaMode::kBlend ? 0.5f
-                                                              : -1.0f;
+      part.alpha_cutoff = m.alpha_mode == AlphaMode::kMask ? m.alpha_cutoff : -1.0f;
+      part.blend = m.alpha_mode == AlphaMode::kBlend;
       part.double_sided = m.double_sided;
     }
     parts_.push_back(part);

@@ -45,7 +45,9 @@ class GpuLook {
     GLuint base_texture = 0;     // 0: none (white)
     GLuint normal_texture = 0;   // 0: none (flat)
     float normal_scale = 1.0f;
-    float alpha_cutoff = -1.0f;  // < 0: opaque (blend is drawn as mask at 0.5)
+    float alpha_cutoff = -1.0f;  // < 0: opaque (and blended parts)
+    bool blend = false;          // alphaMode BLEND: drawn blended after the others, depth
+                                 // read but not written
     bool double_sided = false;
   };
 

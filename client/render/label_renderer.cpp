@@ -26,7 +26,11 @@ void main() {
 constexpr const char* kLabelFragment = R"(#version 330 core
 in vec4 v_color;
 out vec4 o_color;
-void main() { o_color = v_color; }
+// Colours are display values; the target is sRGB (linear light in, encoded on write).
+vec3 toLinear(vec3 c) {
+  return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
+}
+void main() { o_color = vec4(toLinear(v_color.rgb), v_color.a); }
 )";
 
 std::uint8_t toByte(float v) {

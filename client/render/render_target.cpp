@@ -47,7 +47,7 @@ Status RenderTarget::resize(int width, int height, int samples) {
   // The resolve target: what screenshots read (with its own depth when it is drawn into).
   glGenFramebuffers(1, &resolve_fbo_);
   glBindFramebuffer(GL_FRAMEBUFFER, resolve_fbo_);
-  resolve_color_ = makeRenderbuffer(GL_RGBA8, width, height, 0);
+  resolve_color_ = makeRenderbuffer(GL_SRGB8_ALPHA8, width, height, 0);
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, resolve_color_);
   if (samples == 0) {
     resolve_depth_ = makeRenderbuffer(GL_DEPTH24_STENCIL8, width, height, 0);
@@ -63,7 +63,7 @@ Status RenderTarget::resize(int width, int height, int samples) {
   if (samples > 0) {
     glGenFramebuffers(1, &draw_fbo_);
     glBindFramebuffer(GL_FRAMEBUFFER, draw_fbo_);
-    draw_color_ = makeRenderbuffer(GL_RGBA8, width, height, samples);
+    draw_color_ = makeRenderbuffer(GL_SRGB8_ALPHA8, width, height, samples);
     draw_depth_ = makeRenderbuffer(GL_DEPTH24_STENCIL8, width, height, samples);
     glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, draw_color_);
     glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
@@ -83,20 +83,30 @@ Status RenderTarget::resize(int width, int height, int samples) {
 
 void RenderTarget::bindForDrawing() const {
   glBindFramebuffer(GL_FRAMEBUFFER, draw_fbo_ != 0 ? draw_fbo_ : resolve_fbo_);
+  glEnable(GL_FRAMEBUFFER_SRGB);  // shaders write linear light; blending happens in linear
 }
 
 void RenderTarget::resolve() const {
-  if (draw_fbo_ == 0) return;
+  if (draw_fbo_ == 0) {
+    glDisable(GL_FRAMEBUFFER_SRGB);
+    return;
+  }
+  // Both buffers are sRGB and GL_FRAMEBUFFER_SRGB is on: the samples are decoded to linear,
+  // averaged, and encoded again, so an edge half covered is half as bright in light, not in
+  // encoded values.
+  glEnable(GL_FRAMEBUFFER_SRGB);
   glBindFramebuffer(GL_READ_FRAMEBUFFER, draw_fbo_);
   glBindFramebuffer(GL_DRAW_FRAMEBUFFER, resolve_fbo_);
   glBlitFramebuffer(0, 0, width_, height_, 0, 0, width_, height_, GL_COLOR_BUFFER_BIT, GL_NEAREST);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  glDisable(GL_FRAMEBUFFER_SRGB);
 }
 
 void RenderTarget::readPixels(Image& out) const {
   out.width = width_;
   out.height = height_;
   out.rgba.resize(static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_) * 4);
+  glDisable(GL_FRAMEBUFFER_SRGB);  // the stored (sRGB-encoded) bytes, unconverted
   glBindFramebuffer(GL_READ_FRAMEBUFFER, resolve_fbo_);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, out.rgba.data());
@@ -105,6 +115,7 @@ void RenderTarget::readPixels(Image& out) const {
 }
 
 void RenderTarget::blitToDefault(int window_width, int window_height) const {
+  glDisable(GL_FRAMEBUFFER_SRGB);  // copies the encoded bytes as they are
   glBindFramebuffer(GL_READ_FRAMEBUFFER, resolve_fbo_);
   glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
   const bool same = window_width == width_ && window_height == height_;

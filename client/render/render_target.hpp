@@ -1,5 +1,8 @@
 // The offscreen framebuffer every frame is drawn into: a multisampled colour + depth
 // target resolved into a single-sample one, which screenshots read and a window shows.
+// Colour is sRGB-encoded (GL_SRGB8_ALPHA8) with GL_FRAMEBUFFER_SRGB on while drawing and
+// resolving: shaders write linear light, blending and the MSAA resolve average in linear
+// light, and the stored bytes (what readPixels returns and the window shows) are sRGB.
 // Depth has 24 bits and a stencil of 8 (the shadows mark the pixels they darkened).
 #pragma once
 
@@ -22,7 +25,8 @@ class RenderTarget {
   // the framebuffer is incomplete.
   Status resize(int width, int height, int samples);
 
-  // Binds the framebuffer to draw into.
+  // Binds the framebuffer to draw into and enables GL_FRAMEBUFFER_SRGB (so clear colours
+  // and fragment outputs are linear; resolve() turns it off again).
   void bindForDrawing() const;
   // Resolves the multisampled colour into the single-sample framebuffer.
   void resolve() const;

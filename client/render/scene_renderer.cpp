@@ -1,6 +1,7 @@
 #include "client/render/scene_renderer.hpp"
 
 #include <array>
+#include <cmath>
 #include <string>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -79,6 +80,9 @@ uniform vec3 u_color;
 uniform vec3 u_eye;
 uniform vec3 u_light;  // unit direction towards the light
 out vec4 o_color;
+vec3 toLinear(vec3 c) {
+  return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
+}
 void main() {
   vec3 n = normalize(v_normal);
   if (!gl_FrontFacing) n = -n;
@@ -89,7 +93,8 @@ void main() {
   vec3 h = normalize(v + u_light);
   float highlight = 0.06 * pow(max(dot(n, h), 0.0), 24.0);
   vec3 c = u_color * (ambient + 0.70 * diffuse * vec3(1.0, 0.97, 0.92)) + vec3(highlight);
-  o_color = vec4(min(c, vec3(1.0)), 1.0);
+  // Tuned as display values: written as linear light to the sRGB target.
+  o_color = vec4(toLinear(min(c, vec3(1.0))), 1.0);
 }
 )";
 
@@ -113,6 +118,9 @@ uniform vec3 u_center;
 uniform float u_extent;
 uniform vec3 u_background;
 out vec4 o_color;
+vec3 toLinear(vec3 c) {
+  return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
+}
 void main() {
   vec2 p = v_world.xz / 0.5;
   vec2 w = fwidth(p) + 1e-4;
@@ -121,13 +129,13 @@ void main() {
   vec3 c = mix(vec3(0.24, 0.26, 0.30), vec3(0.34, 0.36, 0.41), checker);
   float d = length(v_world.xz - u_center.xz);
   c = mix(c, u_background, smoothstep(0.45 * u_extent, u_extent, d));
-  o_color = vec4(c, 1.0);
+  o_color = vec4(toLinear(c), 1.0);  // display values, written as linear light
 }
 )";
 
 // The look's fragment shader: base colour (linear factor x sRGB texture, decoded by the
 // sampler), optional normal map (tangent frame from screen-space derivatives, glTF's +Y
-// up = towards -v), lighting in linear light, explicit linear -> sRGB encoding.
+// up = towards -v), lighting in linear light, written linear (the sRGB target encodes).
 constexpr const char* kLookFragment = R"(#version 330 core
 in vec3 v_world;
 in vec3 v_normal;
@@ -141,11 +149,8 @@ uniform sampler2D u_normal_tex;
 uniform bool u_has_normal_map;
 uniform float u_normal_scale;
 uniform float u_alpha_cutoff;  // < 0: opaque
+uniform bool u_blend;          // alphaMode BLEND: the alpha goes to blending
 out vec4 o_color;
-vec3 toSrgb(vec3 c) {
-  c = clamp(c, 0.0, 1.0);
-  return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
-}
 void main() {
   vec4 base = u_base_color * texture(u_base_tex, v_uv);
   if (u_alpha_cutoff >= 0.0 && base.a < u_alpha_cutoff) discard;
@@ -177,14 +182,16 @@ void main() {
   float highlight = 0.03 * pow(max(dot(n, h), 0.0), 32.0);
   vec3 albedo = base.rgb * u_tint;
   vec3 c = albedo * (ambient + 0.85 * diffuse * vec3(1.0, 0.96, 0.90)) + vec3(highlight);
-  o_color = vec4(toSrgb(c), 1.0);
+  o_color = vec4(clamp(c, 0.0, 1.0), u_blend ? clamp(base.a, 0.0, 1.0) : 1.0);
 }
 )";
 
 constexpr const char* kShadowFragment = R"(#version 330 core
 uniform float u_alpha;
 out vec4 o_color;
-void main() { o_color = vec4(0.0, 0.0, 0.0, u_alpha); }
+// u_alpha darkens the encoded value by (1 - u_alpha); blending is in linear light, where
+// that is about (1 - u_alpha)^2.2.
+void main() { o_color = vec4(0.0, 0.0, 0.0, 1.0 - pow(1.0 - u_alpha, 2.2)); }
 )";
 
 // A vertex shader with texture coordinates passed through (attribute 6).
@@ -220,6 +227,15 @@ void buildDiamond(std::array<glm::vec3, 24>& positions, std::array<glm::vec3, 24
 
 // Key light from above, in front and to the side (room space): unit direction towards it.
 glm::vec3 keyLight() { return glm::normalize(glm::vec3(0.4f, 0.8f, 0.45f)); }
+
+// An sRGB-encoded colour in linear light (the exact inverse of GL's encoding).
+glm::vec3 srgbToLinear(const glm::vec3& c) {
+  glm::vec3 out;
+  for (int k = 0; k < 3; ++k) {
+    out[k] = c[k] <= 0.04045f ? c[k] / 12.92f : std::pow((c[k] + 0.055f) / 1.055f, 2.4f);
+  }
+  return out;
+}
 
 }  // namespace
 
@@ -322,6 +338,7 @@ Status SceneRenderer::initLook() {
     out.has_normal_map = loc(out.program, "u_has_normal_map");
     out.normal_scale = loc(out.program, "u_normal_scale");
     out.alpha_cutoff = loc(out.program, "u_alpha_cutoff");
+    out.blend = loc(out.program, "u_blend");
     out.joints = loc(out.program, "u_dq");
     glUseProgram(out.program);
     glUniform1i(loc(out.program, "u_base_tex"), 0);
@@ -383,7 +400,34 @@ void SceneRenderer::drawLookParts(const LookProgram& p, const GpuLook& look, con
   glUniformMatrix4fv(p.model, 1, GL_FALSE, glm::value_ptr(model));
   glUniformMatrix3fv(p.normal_matrix, 1, GL_FALSE, glm::value_ptr(normal_matrix));
   glUniform3fv(p.tint, 1, glm::value_ptr(tint));
-  for (const GpuLook::Part& part : look.parts()) {
+  // Opaque and masked parts first, then the blended ones over them (alpha blending in
+  // linear light, depth tested but not written, so they never hide what is behind).
+  bool any_blend = false;
+  for (const GpuLook::Part& part : look.parts()) any_blend = any_blend || part.blend;
+  for (int pass = 0; pass < (any_blend ? 2 : 1); ++pass) {
+    const bool blend_pass = pass == 1;
+    glUniform1i(p.blend, blend_pass ? 1 : 0);
+    if (blend_pass) {
+      glEnable(GL_BLEND);
+      glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+      glDepthMask(GL_FALSE);
+    }
+    for (const GpuLook::Part& part : look.parts()) {
+      if (part.blend != blend_pass) continue;
+      drawLookPart(p, part, cpu, gpu, with_offsets);
+    }
+    if (blend_pass) {
+      glDepthMask(GL_TRUE);
+      glDisable(GL_BLEND);
+    }
+  }
+  glBindTexture(GL_TEXTURE_2D, 0);
+}
+
+void SceneRenderer::drawLookPart(const LookProgram& p, const GpuLook::Part& part,
+                                 const GpuMesh* cpu, const GpuSkinMesh* gpu,
+                                 bool with_offsets) const {
+  {
     glUniform4fv(p.base_color, 1, glm::value_ptr(part.base_color));
     glUniform1i(p.has_normal_map, part.normal_texture != 0 ? 1 : 0);
     glUniform1f(p.normal_scale, part.normal_scale);
@@ -401,7 +445,6 @@ void SceneRenderer::drawLookParts(const LookProgram& p, const GpuLook& look, con
     }
     if (part.double_sided) glEnable(GL_CULL_FACE);
   }
-  glBindTexture(GL_TEXTURE_2D, 0);
 }
 
 void SceneRenderer::drawMeshLook(const GpuMesh& mesh, const GpuLook& look, const glm::mat4& model,
@@ -488,7 +531,11 @@ void SceneRenderer::endShadows() const {
 void SceneRenderer::clearViewport(const glm::ivec4& viewport, bool color, bool depth) const {
   glEnable(GL_SCISSOR_TEST);
   glScissor(viewport.x, viewport.y, viewport.z, viewport.w);
-  glClearColor(kBackgroundColor.r, kBackgroundColor.g, kBackgroundColor.b, 1.0f);
+  // Linear light (GL_FRAMEBUFFER_SRGB converts clear colours too): stored as kBackgroundColor.
+  // The linear value of the byte kBackgroundColor was always stored as, so that the
+  // encoding gives that byte back exactly.
+  const glm::vec3 background = srgbToLinear(glm::round(kBackgroundColor * 255.0f) / 255.0f);
+  glClearColor(background.r, background.g, background.b, 1.0f);
   glClearDepth(1.0);
   glClear((color ? GL_COLOR_BUFFER_BIT : 0u) | (depth ? GL_DEPTH_BUFFER_BIT : 0u));
   glDisable(GL_SCISSOR_TEST);

@@ -1,12 +1,17 @@
 // Draws the room: a box-filtered checker floor that fades into the background, lit skin
 // (hemisphere ambient + one directional key light + a faint highlight), and marker
-// diamonds. Colours are linear 0..1 RGB written straight to an RGBA8 target.
+// diamonds. The target is sRGB (RenderTarget: GL_SRGB8_ALPHA8 with GL_FRAMEBUFFER_SRGB on),
+// so every shader writes linear light and blending and the MSAA resolve happen in linear
+// light; the plain paths above are tuned as display values and converted to linear in
+// their shaders (so they store the bytes they always did), and the background clear too.
 //
 // Avatars with a look (materials, textures: GpuLook) are drawn sRGB-correctly: colour
 // textures are sampled from sRGB textures (linear values), factors are linear, lighting
-// is computed in linear light and the result is encoded to sRGB in the fragment shader
-// (the target stays RGBA8, so the plain paths above look as before). Normal maps use a
-// tangent frame from screen-space derivatives (no tangents needed).
+// is computed in linear light and written linear (the target encodes it). Normal maps use
+// a tangent frame from screen-space derivatives (no tangents needed). alphaMode MASK
+// discards below the cutoff; BLEND parts are drawn after the mesh's other parts, alpha
+// blended (in linear light), depth tested but not written (per mesh: a caller that wants
+// blended parts behind later meshes right draws blended meshes last, far to near).
 //
 // Shadows: planar projected shadows of the key light (Blinn 1988): each mesh drawn again,
 // flattened onto the floor plane y = 0 along the light, as a translucent dark overlay
@@ -98,7 +103,7 @@ class SceneRenderer {
     GLuint program = 0;
     GLint model = -1, view_proj = -1, normal_matrix = -1, eye = -1, light = -1;
     GLint base_color = -1, tint = -1, has_normal_map = -1, normal_scale = -1;
-    GLint alpha_cutoff = -1, joints = -1;
+    GLint alpha_cutoff = -1, blend = -1, joints = -1;
   };
   struct ShadowProgram {
     GLuint program = 0;
@@ -110,6 +115,8 @@ class SceneRenderer {
   void drawLookParts(const LookProgram& p, const GpuLook& look, const glm::mat4& model,
                      const glm::vec3& tint, const GpuMesh* cpu, const GpuSkinMesh* gpu,
                      bool with_offsets) const;
+  void drawLookPart(const LookProgram& p, const GpuLook::Part& part, const GpuMesh* cpu,
+                    const GpuSkinMesh* gpu, bool with_offsets) const;
   void beginShadow(const ShadowProgram& p, const EyeCamera& eye) const;
 
   LookProgram look_program_;
