@@ -18,7 +18,13 @@
   const kColors = [0x5b8def, 0xe8794a, 0x59b36b, 0xc265d6, 0xd4b94a, 0x4fc1c7, 0xe25c7a, 0x9a9a9a];
 
   const roomName = decodeURIComponent(location.pathname.split('/').filter(Boolean).pop() || '');
-  const token = new URLSearchParams(location.search).get('token') || '';
+  const params = new URLSearchParams(location.search);
+  const token = params.get('token') || '';
+  // Visible spectator (web/PROTOCOL.md): ?visible=1[&name=N] or the "visible" toggle joins
+  // the room as a member others see at this page's camera (servers with --web-members).
+  const kPoseInterval = 0.1;  // seconds between camera poses sent (10 Hz)
+  const visibleName = (params.get('name') || '').slice(0, 64);
+  let wantVisible = params.get('visible') === '1';
 
   // ------------------------------------------------------------------ the summary
   const summary = {
@@ -35,6 +41,7 @@
     errors: [],
     webgl: { ok: false, renderer: '', contextLost: false, glErrors: 0 },
     camera: 'orbit',
+    visible: { wanted: wantVisible, state: 'off', id: 0, name: '', message: '', posesSent: 0 },
   };
   window.vistelScene = summary;
   function recordError(text) {
@@ -150,6 +157,7 @@
     cameraSelect.appendChild(option);
     m.option = option;
     if (info.avatar) loadAvatar(m);
+    m.group.visible = m.id !== summary.visible.id;
     members.set(m.id, m);
   }
 
@@ -301,6 +309,10 @@
         m.samples = [];
         m.lastSequence = -1;
       }
+    } else if (msg.type === 'member') {
+      onMemberState(msg);
+    } else if (msg.type === 'error') {
+      recordError('server: ' + msg.message);
     } else if (msg.type === 'roster') {
       onRoster(msg);
     } else if (msg.type === 'status') {
@@ -325,6 +337,8 @@
       summary.connected = true;
       summary.connects++;
       wait = kReconnectMin;
+      setVisibleState('off', '', 0, '');
+      if (wantVisible) sendJson({ type: 'join', name: visibleName });
     };
     socket.onmessage = (e) => {
       if (typeof e.data === 'string') onText(e.data);
@@ -345,6 +359,56 @@
         connect();
       }, delay * 1000);
     };
+  }
+
+  // ------------------------------------------------------------------ visible spectator
+  const visibleToggle = document.getElementById('visible');
+  const visibleNote = document.getElementById('visible-note');
+  function sendJson(obj) {
+    if (socket && socket.readyState === WebSocket.OPEN) socket.send(JSON.stringify(obj));
+  }
+  function setVisibleState(state, message, id, name) {
+    const v = summary.visible;
+    v.state = state;
+    v.message = message || '';
+    v.id = id || 0;
+    v.name = name || '';
+    if (visibleNote) visibleNote.textContent = state === 'off' ? '' : state === 'live' ?
+      'visible as ' + v.name : state === 'refused' ? 'not visible: ' + v.message : state + '…';
+    // Our own member stands at our camera: hidden from our own view.
+    for (const m of members.values()) m.group.visible = m.id !== v.id;
+  }
+  function onMemberState(msg) {
+    setVisibleState(msg.state, msg.message, msg.id, msg.name);
+    if (msg.state === 'refused') {
+      wantVisible = false;
+      summary.visible.wanted = false;
+      if (visibleToggle) visibleToggle.checked = false;
+    }
+  }
+  if (visibleToggle) {
+    visibleToggle.checked = wantVisible;
+    visibleToggle.addEventListener('change', () => {
+      wantVisible = visibleToggle.checked;
+      summary.visible.wanted = wantVisible;
+      sendJson(wantVisible ? { type: 'join', name: visibleName } : { type: 'leave' });
+      if (!wantVisible) setVisibleState('off', '', 0, '');
+    });
+  }
+  const viewDir = new THREE.Vector3();
+  let lastPoseAt = -1;
+  function sendPose() {
+    const v = summary.visible;
+    if (!wantVisible || (v.state !== 'joining' && v.state !== 'live')) return;
+    const t = localNow();
+    if (t - lastPoseAt < kPoseInterval) return;
+    lastPoseAt = t;
+    camera.getWorldDirection(viewDir);
+    const p = camera.position;
+    const clamp = (x) => Math.max(-100, Math.min(100, x));
+    sendJson({ type: 'pose', x: clamp(p.x), y: clamp(p.y), z: clamp(p.z),
+      yaw: Math.atan2(viewDir.x, viewDir.z), pitch: Math.asin(Math.max(-1, Math.min(1, viewDir.y))) });
+    v.posesSent++;
   }
 
   // ------------------------------------------------------------------ playback
@@ -462,7 +526,7 @@
         head = [tmp.x, tmp.y, tmp.z];
         tmp.y += 0.3;
         tmp.project(camera);
-        const visible = tmp.z < 1 && Math.abs(tmp.x) < 1.1 && Math.abs(tmp.y) < 1.1;
+        const visible = m.group.visible && tmp.z < 1 && Math.abs(tmp.x) < 1.1 && Math.abs(tmp.y) < 1.1;
         m.tag.style.display = visible ? '' : 'none';
         m.tag.style.left = ((tmp.x + 1) / 2 * w) + 'px';
         m.tag.style.top = ((1 - tmp.y) / 2 * h) + 'px';
@@ -471,7 +535,7 @@
         m.tag.style.display = 'none';
       }
       list.push({ id: m.id, name: m.name, avatar: m.avatar, loaded: m.loaded, failed: m.failed,
-        samples: m.samples.length, motion: m.motion, head, screen: m.screen });
+        samples: m.samples.length, motion: m.motion, head, screen: m.screen, hidden: !m.group.visible });
     }
     summary.members = list;
     summary.props = Array.from(props.values()).map((p) => ({
@@ -484,6 +548,7 @@
     for (const m of members.values()) pose(m, renderTime);
     placeProps(renderTime);
     updateCamera();
+    sendPose();
     renderer.render(scene, camera);
     summary.framesRendered++;
     if (summary.framesRendered % 30 === 0 && gl) {
@@ -496,6 +561,17 @@
     updateOverlay();
   }
 
+  // Leaving the page closes its socket at once (a visible spectator's member goes with it),
+  // even where the browser keeps the page for going back; coming back reconnects.
+  window.addEventListener('pagehide', () => {
+    giveUp = true;
+    if (socket) socket.close(1000, 'page left');
+  });
+  window.addEventListener('pageshow', (e) => {
+    if (!e.persisted) return;
+    giveUp = false;
+    if (!socket) connect();
+  });
   summary.setCamera = setCamera;
   setStatus('connecting', 'connecting…');
   connect();

@@ -17,7 +17,8 @@
 // TLS 1.2+ with that certificate chain and key (PEM); clients then need --tls.
 // --web-port P (or [web] port) serves the room list, spectator pages and avatars over HTTP
 // and WebSocket on that TCP port (0: a free one, printed as "vistel-server web on
-// http://ADDRESS:PORT/"); server/web/web_server.hpp.
+// http://ADDRESS:PORT/"); server/web/web_server.hpp. --web-members (or [web] members) lets
+// those pages join their room as visible members (server/web/web_member.hpp).
 // --record-room DIR records every room as a skinned glTF animation DIR/<room>-<start>.glb,
 // written when the room empties or the server stops (server/record/server_recorder.hpp);
 // --record-rate HZ samples per second (default 30), --record-max-s S caps each room's
@@ -77,6 +78,10 @@ int main(int argc, char** argv) {
                  "HTTP and WebSocket on this TCP port (0: a free port; default from config "
                  "[web] port: none)")
       ->check(CLI::Range(0, 65535));
+  bool web_members = false;
+  app.add_flag("--web-members", web_members,
+               "let spectator pages join their room as visible members (a camera-headed "
+               "avatar at the viewer's camera; default from config [web] members: off)");
   ServerRecordOptions record_options;
   app.add_option("--record-room", record_options.dir,
                  "record every room as a skinned glTF animation DIR/<room>-<start>.glb, "
@@ -142,6 +147,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   if (web_port >= 0) web_config->port = web_port;
+  if (web_members) web_config->members = true;
   if (port >= 0) config->port = static_cast<std::uint16_t>(port);
   if (!bind.empty()) config->bind_address = bind;
   if (!log_level.empty()) {
@@ -224,6 +230,8 @@ int main(int argc, char** argv) {
     web_options.seat_layout = config->seat_layout;
     web_options.tick_rate_hz = config->tick_rate_hz;
     web_options.join_secret = config->join_secret;
+    web_options.session_port = shell.localPort();
+    web_options.tls_cert_file = config->tls_cert_file;
     auto started = WebServer::start(io, shell, std::move(web_options));
     if (!started) {
       spdlog::error("--web-port: {}", started.error().message);

@@ -3,6 +3,7 @@
 #include <toml++/toml.h>
 
 #include "common/config/config_table.hpp"
+#include "server/web/web_request.hpp"
 
 namespace vistel::server {
 
@@ -26,6 +27,14 @@ Result<WebConfig> parseWebConfig(std::string_view toml_text, std::string_view so
   VISTEL_CONFIG_TRY(web.number("max_stream_rate_hz", c.max_stream_rate_hz, 1.0, 240.0));
   VISTEL_CONFIG_TRY(web.number("max_ws_queue_bytes", c.max_ws_queue_bytes, 65536, 1 << 30));
   VISTEL_CONFIG_TRY(web.boolean("public_room_list", c.public_room_list));
+  std::string hosts;
+  VISTEL_CONFIG_TRY(web.string("allowed_hosts", hosts));
+  auto allowed = parseAllowedHosts(hosts);
+  if (!allowed) return fail("{}: [web] {}", source_name, allowed.error().message);
+  c.allowed_hosts = std::move(*allowed);
+  VISTEL_CONFIG_TRY(web.boolean("members", c.members));
+  VISTEL_CONFIG_TRY(web.number("max_members", c.max_members, 1, 10000));
+  VISTEL_CONFIG_TRY(web.number("member_pose_rate_hz", c.member_pose_rate_hz, 1.0, 60.0));
   VISTEL_CONFIG_TRY(web.checkUnknown());
   return c;
 }

@@ -4,7 +4,9 @@
 #pragma once
 
 #include <cstddef>
+#include <string>
 #include <string_view>
+#include <vector>
 
 #include "common/base/result.hpp"
 
@@ -24,6 +26,15 @@ struct WebConfig {
   double max_stream_rate_hz = 60.0;           // frames per second (the room's tick rate, at most)
   std::size_t max_ws_queue_bytes = 1u << 20;  // a spectator this far behind is dropped
   bool public_room_list = false;  // with join tokens, list rooms anyway (otherwise hidden)
+  // DNS-rebinding defence (web_request.hpp hostAllowed): names besides IP addresses and
+  // localhost that a request's Host may carry ("name" or "name:port"); others get 421.
+  // In TOML a string of names separated by commas or spaces.
+  std::vector<std::string> allowed_hosts;
+  // Visible spectators (web_member.hpp; `--web-members`): a page may join its room as a
+  // member others see (a camera-headed avatar at its camera). Off: such requests are refused.
+  bool members = false;
+  int max_members = 16;               // visible spectators at once, all rooms
+  double member_pose_rate_hz = 10.0;  // postures sent per visible spectator (at most)
 };
 
 // Reads [web] from the server's TOML text (other sections are ignored: the server's own

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <string>
 
 #include "server/web/web_beast.hpp"
 
@@ -193,6 +194,94 @@ std::optional<ParsedHead> parseRequestHead(std::string_view bytes, std::size_t m
   parsed.keep_alive = req.keep_alive();
   parsed.version = static_cast<int>(req.version());
   return parsed;
+}
+
+namespace {
+
+// A Host value split into its lowercased name and its port (0: none); false when malformed.
+struct HostParts {
+  std::string name;  // IPv6 without brackets
+  bool ipv6 = false;
+  int port = 0;
+};
+bool splitHost(std::string_view host, HostParts& out) {
+  std::string_view name = host;
+  std::string_view port;
+  if (host.starts_with('[')) {
+    const auto close = host.find(']');
+    if (close == std::string_view::npos) return false;
+    name = host.substr(1, close - 1);
+    const std::string_view rest = host.substr(close + 1);
+    if (!rest.empty()) {
+      if (rest[0] != ':') return false;
+      port = rest.substr(1);
+    }
+    out.ipv6 = true;
+  } else if (const auto colon = host.rfind(':'); colon != std::string_view::npos) {
+    name = host.substr(0, colon);
+    port = host.substr(colon + 1);
+  }
+  if (name.empty() || name.size() > 253) return false;
+  out.name.clear();
+  for (char c : name) {
+    const char lower = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    const bool ok = (lower >= 'a' && lower <= 'z') || (lower >= '0' && lower <= '9') ||
+                    lower == '-' || lower == '.' || (out.ipv6 && lower == ':');
+    if (!ok) return false;
+    out.name.push_back(lower);
+  }
+  if (!out.ipv6 && out.name.size() > 1 && out.name.back() == '.') out.name.pop_back();
+  out.port = 0;
+  if (host.size() > 0 && host.back() == ':' && port.empty()) return false;
+  if (!port.empty()) {
+    if (port.size() > 5) return false;
+    for (char c : port) {
+      if (c < '0' || c > '9') return false;
+      out.port = out.port * 10 + (c - '0');
+    }
+    if (out.port < 1 || out.port > 65535) return false;
+  }
+  return true;
+}
+
+bool ipLiteral(const HostParts& parts) {
+  beast::error_code ec;
+  const auto address = asio::ip::make_address(parts.name, ec);
+  return !ec && address.is_v6() == parts.ipv6;
+}
+
+}  // namespace
+
+bool hostAllowed(std::string_view host, std::span<const std::string> allowed) {
+  if (host.empty()) return true;
+  HostParts parts;
+  if (!splitHost(host, parts)) return false;
+  if (ipLiteral(parts) || parts.name == "localhost") return true;
+  for (const std::string& entry : allowed) {
+    HostParts want;
+    if (!splitHost(entry, want)) continue;
+    if (want.name == parts.name && (want.port == 0 || want.port == parts.port)) return true;
+  }
+  return false;
+}
+
+Result<std::vector<std::string>> parseAllowedHosts(std::string_view text) {
+  std::vector<std::string> out;
+  std::size_t at = 0;
+  while (at < text.size()) {
+    const auto end = text.find_first_of(", \t", at);
+    const std::string_view entry =
+        text.substr(at, end == std::string_view::npos ? text.npos : end - at);
+    at = end == std::string_view::npos ? text.size() : end + 1;
+    if (entry.empty()) continue;
+    HostParts parts;
+    if (!splitHost(entry, parts)) {
+      return fail("allowed_hosts: '{}' is not a host name or host:port", entry);
+    }
+    std::string name = parts.ipv6 ? "[" + parts.name + "]" : parts.name;
+    out.push_back(parts.port == 0 ? name : name + ":" + std::to_string(parts.port));
+  }
+  return out;
 }
 
 std::string_view statusText(int status) {

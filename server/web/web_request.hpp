@@ -15,8 +15,10 @@
 
 #include <cstddef>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "common/base/result.hpp"
 
@@ -85,6 +87,20 @@ struct HeadError {
 };
 std::optional<ParsedHead> parseRequestHead(std::string_view bytes, std::size_t max_header_bytes,
                                            HeadError* error);
+
+// DNS-rebinding defence: whether a Host header names this server. Allowed: no Host at all
+// (not a browser's request: HTTP/1.0 tools), an IP address literal (IPv4, or IPv6 in
+// brackets) with any port, "localhost" with any port, and the names in `allowed` (each
+// "name", any port, or "name:port"; case-insensitive; a trailing dot ignored). Not
+// allowed: any other name, a malformed Host (bad characters, a port that is not 1-65535).
+// A page served under a name whose DNS an attacker points at this server then gets no
+// answer (the server answers 421). IP literals and localhost cannot be rebound. Pure.
+bool hostAllowed(std::string_view host, std::span<const std::string> allowed);
+
+// [web] allowed_hosts: names (or name:port) separated by commas or spaces, lowercased.
+// Errors name the entry that is not a host name (letters, digits, '-', '.'; a port
+// 1-65535).
+Result<std::vector<std::string>> parseAllowedHosts(std::string_view text);
 
 // The standard reason phrase of an HTTP status ("Not Found"); "Error" for one unknown.
 std::string_view statusText(int status);

@@ -12,15 +12,19 @@
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
+#include <nlohmann/json.hpp>
 
+#include "client/net/net_driver.hpp"
 #include "common/auth/join_token.hpp"
 #include "common/auth/token_command.hpp"
 #include "common/avatar/avatar_io.hpp"
+#include "common/tls/tls_context.hpp"
 #include "server/web/avatar_glb.hpp"
 #include "server/web/spectator_stream.hpp"
 #include "server/web/web_assets.hpp"
 #include "server/web/web_beast.hpp"
 #include "server/web/web_limits.hpp"
+#include "server/web/web_member.hpp"
 #include "server/web/web_pages.hpp"
 
 namespace vistel::server {
@@ -30,7 +34,7 @@ using tcp = asio::ip::tcp;
 using Strand = asio::strand<asio::io_context::executor_type>;
 using Clock = std::chrono::steady_clock;
 
-constexpr std::size_t kMaxWsMessageBytes = 1024;  // from the browser (it sends nothing)
+constexpr std::size_t kMaxWsMessageBytes = 1024;  // from the browser (a visible spectator's)
 constexpr double kWsMessageRateHz = 20.0;         // ... sustained
 constexpr double kWsMessageBurst = 40.0;
 
@@ -132,6 +136,29 @@ struct WebServer::State : std::enable_shared_from_this<WebServer::State> {
   // The .glb of an avatar (cached), or null; reply on any thread.
   void avatarGlbOf(const std::string& hash,
                    std::function<void(std::shared_ptr<const std::vector<std::uint8_t>>)> reply);
+  // The visible spectators' avatar (made once, web_member.hpp).
+  struct MemberAvatar {
+    std::shared_ptr<const std::vector<std::uint8_t>> bytes;
+    std::string hash;
+    int joint_count = 0;
+  };
+  const MemberAvatar& memberAvatar() {
+    std::call_once(member_avatar_once, [this] {
+      const AvatarModel model = makeSpectatorAvatar();
+      auto bytes = std::make_shared<const std::vector<std::uint8_t>>(encodeAvatar(model));
+      member_avatar.hash = avatarContentHash(*bytes);
+      member_avatar.bytes = std::move(bytes);
+      member_avatar.joint_count = model.skeleton.jointCount();
+    });
+    return member_avatar;
+  }
+  // Where visible spectators join: the session server on this host.
+  net::ServerAddress sessionAddress() const {
+    std::string host = options.bind_address;
+    if (host == "0.0.0.0" || host.empty()) host = "127.0.0.1";
+    if (host == "::") host = "::1";
+    return {host, options.session_port};
+  }
   // A spectator joins / leaves its room's feed.
   bool joinFeed(const std::string& room, const std::shared_ptr<WsSession>& session);
   void leaveFeed(const std::string& room, WsSession* session);
@@ -151,7 +178,10 @@ struct WebServer::State : std::enable_shared_from_this<WebServer::State> {
   std::unordered_map<std::uint64_t, std::weak_ptr<Closable>> open;
   std::map<std::string, std::shared_ptr<RoomFeed>, std::less<>> feeds;
   std::list<std::pair<std::string, std::shared_ptr<const std::vector<std::uint8_t>>>> glb_cache;
+  int visible_members = 0;  // visible spectators (joined or joining) now
   Clock::time_point start;
+  std::once_flag member_avatar_once;
+  MemberAvatar member_avatar;
 };
 
 using State = WebServer::State;
@@ -183,8 +213,16 @@ class WsSession : public Closable, public std::enable_shared_from_this<WsSession
         room_(std::move(room)),
         token_(std::move(token)),
         id_(state_->next_id++),
-        bucket_(kWsMessageRateHz, kWsMessageBurst, state_->now()) {}
-  ~WsSession() override { state_->untrack(id_); }
+        bucket_(kWsMessageRateHz, kWsMessageBurst, state_->now()),
+        member_timer_(ws_.get_executor()) {}
+  ~WsSession() override {
+    if (driver_) driver_->stop("spectator left");
+    if (counted_member_) {
+      std::lock_guard lock(state_->mutex);
+      --state_->visible_members;
+    }
+    state_->untrack(id_);
+  }
 
   void start(http::request<http::empty_body> request) {
     state_->track(id_, weak_from_this());
@@ -274,11 +312,18 @@ class WsSession : public Closable, public std::enable_shared_from_this<WsSession
         self->finish();
         return;
       }
-      self->in_.consume(self->in_.size());
-      // The page sends nothing; a browser that floods is dropped.
+      // A browser that floods is dropped.
       if (!self->bucket_.take(self->state_->now())) {
+        self->in_.consume(self->in_.size());
         self->closeNow(websocket::close_code::policy_error, "too many messages");
         return;
+      }
+      const std::string text = beast::buffers_to_string(self->in_.data());
+      self->in_.consume(self->in_.size());
+      if (!self->ws_.got_text()) {
+        self->badMessage("a binary message (the page sends JSON text)");
+      } else {
+        guarded("spectator message", [&] { self->onMessage(text); });
       }
       self->read();
     });
@@ -352,7 +397,188 @@ class WsSession : public Closable, public std::enable_shared_from_this<WsSession
                     [self = shared_from_this()](beast::error_code) { self->finish(); });
   }
 
+  // ------------------------------------------------ visible spectators (web_member.hpp)
+
+  void badMessage(std::string_view why) {
+    spdlog::warn("web: spectator of room '{}' from {}: message dropped: {}", room_,
+                 admission_->address, why);
+    state_->refused("bad message");
+    enqueue(std::make_shared<const std::string>(
+                nlohmann::json{{"type", "error"}, {"message", std::string(why)}}.dump()),
+            false);
+  }
+
+  void memberState(std::string_view state, std::string_view message) {
+    nlohmann::json j{{"type", "member"}, {"state", state}, {"message", message}};
+    if (member_id_ != 0) j["id"] = member_id_;
+    if (!member_name_.empty()) j["name"] = member_name_;
+    enqueue(std::make_shared<const std::string>(j.dump()), false);
+  }
+
+  void onMessage(const std::string& text) {
+    auto msg = parseSpectatorMessage(text);
+    if (!msg) {
+      badMessage(msg.error().message);
+      return;
+    }
+    switch (msg->kind) {
+      case SpectatorMessage::Kind::kJoin:
+        joinAsMember(msg->name);
+        return;
+      case SpectatorMessage::Kind::kPose:
+        pose_ = msg->pose;
+        has_pose_ = true;
+        return;
+      case SpectatorMessage::Kind::kLeave:
+        if (driver_) {
+          stopMember("the page left");
+          memberState("left", "no longer visible in the room");
+        }
+        return;
+    }
+  }
+
+  void joinAsMember(const std::string& requested) {
+    const WebConfig& config = state_->options.config;
+    if (!config.members) {
+      spdlog::info(
+          "web: spectator of room '{}' from {} asked to join as a member: refused "
+          "(this server runs without --web-members)",
+          room_, admission_->address);
+      state_->refused("members off");
+      memberState("refused",
+                  "this server does not let spectators join as members (vistel-server "
+                  "--web-members)");
+      return;
+    }
+    if (driver_) {
+      badMessage("already joined as a member");
+      return;
+    }
+    bool room_for_one = false;
+    {
+      std::lock_guard lock(state_->mutex);
+      if (state_->visible_members < config.max_members) {
+        ++state_->visible_members;
+        room_for_one = true;
+      }
+    }
+    if (!room_for_one) {
+      state_->refused("visible spectators");
+      memberState("refused", "too many visible spectators on this server; try again later");
+      return;
+    }
+    counted_member_ = true;
+    const auto& avatar = state_->memberAvatar();
+    net::SessionSettings settings;
+    settings.room = room_;
+    settings.name = spectatorMemberName(requested, id_);
+    member_name_ = settings.name;
+    // The socket's token admitted this page to the room; the member gets a token of its
+    // own from the same secret (the lobby checks room and name).
+    if (!state_->options.join_secret.empty()) {
+      auto token = auth::createJoinToken(state_->options.join_secret,
+                                         {room_, settings.name, auth::unixNow() + 24 * 3600});
+      if (!token) {
+        memberState("refused", token.error().message);
+        stopMember("no token");
+        return;
+      }
+      settings.token = std::move(*token);
+    }
+    settings.avatar_bytes = avatar.bytes;
+    settings.avatar_hash = avatar.hash;
+    settings.avatar_joint_count = avatar.joint_count;
+    settings.fetch_avatars = false;
+    settings.reconnect_give_up_s = 0.0;  // it lives and dies with this socket
+    tls::ClientTlsSettings tls;
+    if (!state_->options.tls_cert_file.empty()) {
+      auto pin = tls::certificateFingerprint(state_->options.tls_cert_file);
+      if (!pin) {
+        memberState("refused", pin.error().message);
+        stopMember("no TLS pin");
+        return;
+      }
+      tls.enabled = true;
+      tls.pin_sha256 = *pin;
+    }
+    net::BackoffSettings backoff;
+    backoff.max_attempts = 2;
+    driver_ = net::NetDriver::create(state_->io, state_->sessionAddress(), settings, nullptr,
+                                     backoff, tls);
+    driver_->start();
+    spdlog::info("web: spectator of room '{}' from {} joins as member '{}'", room_,
+                 admission_->address, member_name_);
+    memberState("joining", "joining the room as a visible spectator");
+    armMemberTimer();
+  }
+
+  void armMemberTimer() {
+    member_timer_.expires_after(seconds(1.0 / state_->options.config.member_pose_rate_hz));
+    member_timer_.async_wait([self = shared_from_this()](beast::error_code ec) {
+      if (ec || !self->driver_) return;
+      guarded("visible spectator", [&] { self->memberTick(); });
+      if (self->driver_) self->armMemberTimer();
+    });
+  }
+
+  // Every 1 / member_pose_rate_hz: tells the page when its member is live or closed, and
+  // sends the newest camera pose as the member's posture.
+  void memberTick() {
+    const net::SessionState s = driver_->state();
+    if (s == net::SessionState::kClosed) {
+      const std::string why = driver_->error();
+      spdlog::info("web: visible spectator '{}' of room '{}' closed: {}", member_name_, room_, why);
+      stopMember("closed");
+      memberState("refused", why.empty() ? "the session server closed the member" : why);
+      return;
+    }
+    if (s != net::SessionState::kLive) return;
+    struct SelfSeat {
+      std::uint32_t id = 0;
+      bool known = false;
+      net::Seat seat;
+    };
+    const SelfSeat self = driver_->withSession([](const net::ClientSession& session, double) {
+      SelfSeat out;
+      out.id = session.memberId();
+      if (const net::RemoteMember* m = session.findMember(out.id)) {
+        out.known = true;
+        out.seat = m->seat;
+      }
+      return out;
+    });
+    if (!self.known) return;
+    if (!live_announced_) {
+      live_announced_ = true;
+      member_id_ = self.id;
+      memberState("live", "visible in the room");
+    }
+    if (!has_pose_) return;
+    driver_->sendPosture(spectatorPosture(pose_, self.seat.x, self.seat.z, self.seat.yaw));
+  }
+
+  // The member leaves (its driver sends Leave and closes).
+  void stopMember(const char* reason) {
+    member_timer_.cancel();
+    if (driver_) {
+      spdlog::info("web: visible spectator '{}' of room '{}' leaves ({})", member_name_, room_,
+                   reason);
+      driver_->stop(reason);
+      driver_.reset();
+    }
+    if (counted_member_) {
+      counted_member_ = false;
+      std::lock_guard lock(state_->mutex);
+      --state_->visible_members;
+    }
+    live_announced_ = false;
+    member_id_ = 0;
+    has_pose_ = false;
+  }
+
   void finish() {
+    stopMember("spectator left");
     if (joined_) {
       joined_ = false;
       state_->leaveFeed(room_, this);
@@ -380,6 +606,15 @@ class WsSession : public Closable, public std::enable_shared_from_this<WsSession
   bool pending_close_ = false;
   bool close_after_flush_ = false;
   websocket::close_code close_code_ = websocket::close_code::normal;
+  // A visible spectator's member (null: none).
+  asio::steady_timer member_timer_;
+  std::shared_ptr<net::NetDriver> driver_;
+  bool counted_member_ = false;  // in State::visible_members
+  bool live_announced_ = false;
+  std::uint32_t member_id_ = 0;
+  std::string member_name_;
+  SpectatorPose pose_;
+  bool has_pose_ = false;
 };
 
 // ---------------------------------------------------------------- room feeds
@@ -643,7 +878,17 @@ class HttpSession : public Closable, public std::enable_shared_from_this<HttpSes
     }
     const auto& req = parser_->get();
     keep_alive_ = req.keep_alive();
-    RequestVerdict verdict = judgeRequest(requestHeadOf(req));
+    const RequestHead head = requestHeadOf(req);
+    if (!hostAllowed(head.host, state_->options.config.allowed_hosts)) {
+      // A name this server does not go by: possibly a page whose DNS was rebound to us.
+      spdlog::info("web: request from {} for Host '{}' refused (not an allowed host name)",
+                   admission_->address, head.host.substr(0, 100));
+      state_->refused("host");
+      respondError(421, "this server does not answer to that Host name ([web] allowed_hosts)",
+                   false);
+      return;
+    }
+    RequestVerdict verdict = judgeRequest(head);
     route_class_ = routeClass(verdict.target.route);
     if (verdict.status != 0) {
       const bool keep =
@@ -727,8 +972,11 @@ class HttpSession : public Closable, public std::enable_shared_from_this<HttpSes
 
   void respondError(int status, std::string_view reason, bool keep) {
     state_->count(&WebServer::Stats::errors);
-    // 429 is counted by WebLimits ("request rate"); a 404 is an answer, not a refusal.
-    if (status != 404 && status != 429 && status < 500) state_->refused("bad request");
+    // 429 is counted by WebLimits ("request rate"), 421 as "host"; a 404 is an answer, not
+    // a refusal.
+    if (status != 404 && status != 421 && status != 429 && status < 500) {
+      state_->refused("bad request");
+    }
     auto body = std::make_shared<const std::string>(
         fmt::format("{} {}: {}\n", status, statusText(status), reason));
     if (!keep) keep_alive_ = false;
@@ -892,8 +1140,9 @@ std::vector<MetricFamily> WebServer::metricFamilies() const {
   }
   for (const auto& [reason, n] : s.refusals) refusals[reason] += n;
   // Every reason is there from the start (at 0), so that rates over them are defined.
-  for (const char* reason : {"connection limit", "connections per address", "request rate", "token",
-                             "bad request", "spectators per room"}) {
+  for (const char* reason :
+       {"connection limit", "connections per address", "request rate", "token", "bad request",
+        "spectators per room", "bad message", "members off", "visible spectators", "host"}) {
     refusals.try_emplace(reason, 0);
   }
   std::vector<MetricFamily> out;

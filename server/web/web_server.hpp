@@ -15,11 +15,20 @@
 //   a status "unauthorized" and is closed (1008, policy violation). An upgrade from a page
 //   of another site (an Origin header other than this server's) is refused with 403.
 //
+// Host names (DNS-rebinding defence): a request whose Host is not an IP address,
+// localhost or one of [web] allowed_hosts gets 421 before anything else (hostAllowed).
+//
+// Visible spectators (--web-members, web_member.hpp): a page may ask to join its room as a
+// member; the server then joins the room for it as a client of its own session server
+// (NetDriver over loopback) with the camera-headed avatar, and sends the page's camera as
+// that member's posture [web] member_pose_rate_hz times a second until the page leaves or
+// its socket closes.
+//
 // Bounds (WebConfig): connections in all and per address, requests per second per
 // address (429 beyond), a request head within max_header_bytes (431) and
 // read_timeout_s, kept-alive connections idle_timeout_s, writes write_timeout_s,
 // spectators per room (503 beyond), WebSocket messages from the browser at most 1 KiB
-// and 20 a second (the page sends none; more closes the socket). Only GET.
+// and 20 a second (more closes the socket). Only GET.
 //
 // Threads: every connection and feed has its own strand; the shared tables a mutex.
 // stop() closes everything so that io.run() can return; destroy the server after.
@@ -48,6 +57,11 @@ struct WebServerOptions {
   SeatLayout seat_layout;                 // the server's ([room]): where members stand
   double tick_rate_hz = 60.0;             // the rooms' rate
   std::vector<std::uint8_t> join_secret;  // non-empty: WebSockets need a token
+  // Visible spectators (config.members): they join the session server at
+  // bind_address (the loopback address for a wildcard one) and this port, over TLS
+  // pinned to this certificate when it is set.
+  std::uint16_t session_port = 0;
+  std::string tls_cert_file;
 };
 
 class WebServer {
@@ -72,8 +86,11 @@ class WebServer {
     // a WebSocket counts its 101 (or its failed handshake) under "websocket".
     std::array<std::array<std::uint64_t, 5>, 6> answers{};
     // Refusals counted here: "token" (a WebSocket's join token), "bad request" (an answer
-    // 4xx other than 404 and 429), "spectators per room". metricFamilies() adds WebLimits'
-    // ("connection limit", "connections per address", "request rate").
+    // 4xx other than 404, 421 and 429), "spectators per room", "host" (a Host header not
+    // allowed: 421), "bad message" (a page's message that could not be used), "members
+    // off" and "visible spectators" (a join as a visible spectator without --web-members,
+    // or beyond [web] max_members). metricFamilies() adds WebLimits' ("connection limit",
+    // "connections per address", "request rate").
     std::map<std::string, std::uint64_t, std::less<>> refusals;
   };
   // The route classes of Stats::answers, in order (label route="...").

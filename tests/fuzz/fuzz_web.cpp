@@ -6,13 +6,20 @@
 // Properties: nothing crashes or reads out of bounds; a rejected head names 400 or 431;
 // a judged request gets 0 (served) or one of 400, 403, 404, 405, 413, 414, 426, and a served
 // one has a known route with a valid room name, a 64-hex hash or an asset name; decoded
-// text holds no control characters; no WebSocket message read is longer than the limit.
+// text holds no control characters; no WebSocket message read is longer than the limit;
+// Host headers (hostAllowed, parseAllowedHosts) and a visible spectator's messages
+// (parseSpectatorMessage: a pose within its documented ranges, a sanitised member name
+// that the lobby's name rule accepts) never crash either.
 #include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include <cmath>
+
+#include "common/auth/member_name.hpp"
 #include "server/web/web_beast.hpp"
+#include "server/web/web_member.hpp"
 #include "server/web/web_request.hpp"
 #include "tests/fuzz/fuzz_support.hpp"
 
@@ -45,6 +52,9 @@ std::vector<fuzz::Seed> makeSeeds() {
       fuzz::textSeed("chunked", "GET / HTTP/1.1\r\nTransfer-Encoding: chunked\r\n\r\n0\r\n\r\n"),
       fuzz::textSeed("escapes", "GET /room/l%61b/%2e%2e?token=%41+%zz&a HTTP/1.0\r\n\r\n"),
       fuzz::textSeed("ws_frames", text_frame + close_frame),
+      fuzz::textSeed("pose", R"({"type":"pose","x":1,"y":1.6,"z":-2,"yaw":0.5,"pitch":0.1})"),
+      fuzz::textSeed("join", R"({"type":"join","name":"Ann <b>"})"),
+      fuzz::textSeed("host", "[::1]:8080"),
   };
 }
 
@@ -134,6 +144,28 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     check(noControl(*text), "decoded text holds no control characters");
     check(text->size() <= bytes.size(), "decoding never grows the text");
   }
+
+  // Host headers and the allow-list's text.
+  if (hostAllowed(bytes, {})) {
+    check(bytes.empty() || bytes.find('/') == std::string_view::npos, "an allowed Host");
+  }
+  if (auto hosts = parseAllowedHosts(bytes)) {
+    for (const std::string& h : *hosts) check(hostAllowed(h, *hosts), "a listed name passes");
+  }
+
+  // A visible spectator's message.
+  if (auto msg = parseSpectatorMessage(bytes)) {
+    if (msg->kind == SpectatorMessage::Kind::kPose) {
+      const SpectatorPose& p = msg->pose;
+      check(std::isfinite(p.x) && std::abs(p.x) <= kMaxPoseDistanceM && std::isfinite(p.y) &&
+                std::abs(p.y) <= kMaxPoseDistanceM && std::isfinite(p.z) &&
+                std::abs(p.z) <= kMaxPoseDistanceM,
+            "a pose within range");
+      check(std::abs(p.yaw) <= 3.1416 && std::abs(p.pitch) <= 1.5708, "angles within range");
+    }
+  }
+  check(auth::validateMemberName(spectatorMemberName(bytes, 7)).ok(),
+        "a spectator's member name is one the lobby takes");
 
   readFrames(bytes);
   return 0;

@@ -75,12 +75,15 @@ TEST(WebConfig, DefaultsValuesAndErrors) {
   ASSERT_TRUE(c);
   EXPECT_EQ(c->port, -1);
   EXPECT_FALSE(c->public_room_list);
+  EXPECT_TRUE(c->allowed_hosts.empty());
+  EXPECT_FALSE(c->members);
   c = parseWebConfig(
       "[network]\nport = 1\n[web]\nport = 8080\nmax_connections = 10\n"
       "max_connections_per_address = 3\nrequest_rate_hz = 5.5\nrequest_burst = 7\n"
       "max_header_bytes = 4096\nread_timeout_s = 2\nidle_timeout_s = 3\nwrite_timeout_s = 4\n"
       "max_spectators_per_room = 9\nmax_stream_rate_hz = 30\nmax_ws_queue_bytes = 100000\n"
-      "public_room_list = true\n",
+      "public_room_list = true\nallowed_hosts = \"a.example, b.example:8080\"\n"
+      "members = true\nmax_members = 3\nmember_pose_rate_hz = 5\n",
       "t.toml");
   ASSERT_TRUE(c) << c.error().message;
   EXPECT_EQ(c->port, 8080);
@@ -96,6 +99,10 @@ TEST(WebConfig, DefaultsValuesAndErrors) {
   EXPECT_DOUBLE_EQ(c->max_stream_rate_hz, 30.0);
   EXPECT_EQ(c->max_ws_queue_bytes, 100000u);
   EXPECT_TRUE(c->public_room_list);
+  EXPECT_EQ(c->allowed_hosts, (std::vector<std::string>{"a.example", "b.example:8080"}));
+  EXPECT_TRUE(c->members);
+  EXPECT_EQ(c->max_members, 3);
+  EXPECT_DOUBLE_EQ(c->member_pose_rate_hz, 5.0);
 
   auto bad = parseWebConfig("[web]\nport = 70000\n", "t.toml");
   ASSERT_FALSE(bad);
@@ -105,6 +112,9 @@ TEST(WebConfig, DefaultsValuesAndErrors) {
   EXPECT_NE(bad.error().message.find("prot"), std::string::npos) << bad.error().message;
   bad = parseWebConfig("[web]\nmax_header_bytes = 10\n", "t.toml");
   EXPECT_FALSE(bad);
+  bad = parseWebConfig("[web]\nallowed_hosts = \"a b/c\"\n", "t.toml");
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("b/c"), std::string::npos) << bad.error().message;
   bad = parseWebConfig("[web\n", "t.toml");
   ASSERT_FALSE(bad);
   EXPECT_NE(bad.error().message.find("t.toml"), std::string::npos);

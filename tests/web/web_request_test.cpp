@@ -119,6 +119,38 @@ TEST(WebRequest, RoomSocketsOnlyFromTheServersOwnPages) {
   EXPECT_EQ(upgrade("", "http://127.0.0.1:8080"), 403);
 }
 
+TEST(WebRequest, HostAllowListAgainstDnsRebinding) {
+  const std::vector<std::string> none;
+  // IP literals (any port), localhost, and no Host at all (not a browser) pass by default.
+  for (const char* host : {"127.0.0.1:8080", "127.0.0.1", "10.1.2.3:80", "[::1]:8080", "[::1]",
+                           "localhost:8080", "LOCALHOST", "localhost.", ""}) {
+    EXPECT_TRUE(hostAllowed(host, none)) << host;
+  }
+  // Any other name (a rebound attacker's domain) and malformed values do not.
+  for (const char* host :
+       {"evil.example", "evil.example:8080", "127.0.0.1.evil.example", "lab.local", "[::1", "::1",
+        "[::1]x", "127.0.0.1:", "127.0.0.1:0", "127.0.0.1:70000", "127.0.0.1:8o", "bad host",
+        "bad_host", "a/b", "[127.0.0.1]", "localhost:123456"}) {
+    EXPECT_FALSE(hostAllowed(host, none)) << host;
+  }
+  // Configured names: any port, or exactly the one given.
+  auto allowed = parseAllowedHosts("lab.example.org, Vistel.Local:8080  other.test");
+  ASSERT_TRUE(allowed) << allowed.error().message;
+  ASSERT_EQ(allowed->size(), 3u);
+  EXPECT_EQ((*allowed)[1], "vistel.local:8080");
+  EXPECT_TRUE(hostAllowed("lab.example.org", *allowed));
+  EXPECT_TRUE(hostAllowed("LAB.example.org:443", *allowed));
+  EXPECT_TRUE(hostAllowed("vistel.local:8080", *allowed));
+  EXPECT_FALSE(hostAllowed("vistel.local:8081", *allowed));
+  EXPECT_FALSE(hostAllowed("vistel.local", *allowed));
+  EXPECT_FALSE(hostAllowed("example.org", *allowed));
+  EXPECT_TRUE(parseAllowedHosts("")->empty());
+  auto bad = parseAllowedHosts("ok.example, not/a/host");
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("not/a/host"), std::string::npos) << bad.error().message;
+  EXPECT_FALSE(parseAllowedHosts("x.example:99999"));
+}
+
 TEST(WebRequest, ParsesHeadsWithinTheLimits) {
   HeadError error;
   auto head = parseRequestHead(

@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/base/file.hpp"
+#include "tests/integration/http_get.hpp"
 #include "tests/integration/program.hpp"
 #include "tests/integration/session_scratch.hpp"
 #include "tests/web_browser/devtools.hpp"
@@ -249,6 +250,90 @@ TEST_F(SpectatorBrowser, WatchesTwoBotsAndRecoversAfterARestart) {
   bots.wait(10.0);
   server->signal(SIGTERM);
   EXPECT_EQ(server->wait(10.0).value_or(-999), 0) << logOf(dir_ + "/server2.log");
+}
+
+// A page opened with ?visible=1 on a server with --web-members joins as a member: the
+// room then lists it beside the bot (at its camera, a camera-headed avatar), the page hides
+// its own avatar, and the member goes with the page.
+TEST_F(SpectatorBrowser, VisiblePageJoinsTheRoomAndLeavesWithIt) {
+  const std::string chromium = test::findChromium();
+  if (chromium.empty()) {
+    GTEST_SKIP() << "no chromium found (install Debian's chromium: scripts/setup; or set "
+                    "VISTEL_CHROMIUM): the visible spectator is not tested in a browser";
+  }
+  test::Program server("vistel-server", {"--port", "0", "--web-port", "0", "--web-members"},
+                       dir_ + "/server.log", true);
+  const std::string address = test::serverAddress(server);
+  ASSERT_FALSE(address.empty()) << logOf(dir_ + "/server.log");
+  const std::string web = webAddress(server);
+  ASSERT_FALSE(web.empty()) << logOf(dir_ + "/server.log");
+  const auto web_port = static_cast<std::uint16_t>(std::stoi(web.substr(web.rfind(':') + 1)));
+  test::Program bots("vistel-bot",
+                     {"--server", address, "--room", "it", "--name", "b", "--bvh", bvh_path_,
+                      "--avatar", avatar_path_, "--loop"},
+                     dir_ + "/bots.log", false);
+
+  test::HeadlessChromium browser(chromium, dir_ + "/profile", dir_ + "/chromium.log");
+  ASSERT_TRUE(browser.ok()) << browser.error() << "\n" << logOf(dir_ + "/chromium.log");
+  ASSERT_FALSE(browser.call("Runtime.enable").is_null()) << browser.error();
+  ASSERT_FALSE(browser.call("Page.enable").is_null()) << browser.error();
+  ASSERT_FALSE(
+      browser.call("Page.navigate", {{"url", "http://" + web + "/room/it?visible=1&name=Cam"}})
+          .is_null())
+      << browser.error();
+  nlohmann::json scene;
+  ASSERT_TRUE(waitForScene(browser, 20.0, scene,
+                           [](const nlohmann::json& s) {
+                             return s["visible"].value("state", "") == "live" &&
+                                    s["visible"].value("posesSent", 0) >= 3 &&
+                                    s["members"].size() == 2 && loadedMembers(s) >= 1;
+                           }))
+      << "scene: " << scene.dump() << "\n"
+      << logOf(dir_ + "/server.log");
+  std::printf("[ measure  ] visible: %s\n", scene["visible"].dump().c_str());
+  EXPECT_EQ(scene["visible"]["name"], "Cam (spectator)");
+  EXPECT_TRUE(scene["errors"].empty()) << scene["errors"].dump();
+  const int self = scene["visible"]["id"].get<int>();
+  // The page does not draw its own member (it stands at the camera); the bot it does.
+  for (const auto& m : scene["members"]) {
+    const bool own = m["id"].get<int>() == self;
+    EXPECT_EQ(m["name"], own ? "Cam (spectator)" : "b");
+    EXPECT_EQ(m.value("hidden", false), own) << m.dump();
+  }
+  // The room, as the server lists it: the bot and the page's member.
+  const std::string rooms = test::httpGet(web_port, "/api/rooms");
+  EXPECT_NE(rooms.find("Cam (spectator)"), std::string::npos) << rooms;
+  EXPECT_NE(rooms.find("\"b\""), std::string::npos) << rooms;
+
+  // Until `present` says whether the member is listed, or 5 s pass: the room list.
+  const auto listedUntil = [&](bool present) {
+    std::string list;
+    for (int i = 0; i < 50; ++i) {
+      list = test::httpGet(web_port, "/api/rooms");
+      if ((list.find("Cam (spectator)") != std::string::npos) == present) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    return list;
+  };
+  // The toggle: off leaves the room (the bot stays), on joins again.
+  browser.evaluate("document.getElementById('visible').click(), 1");
+  std::string after = listedUntil(false);
+  EXPECT_EQ(after.find("Cam (spectator)"), std::string::npos)
+      << after << logOf(dir_ + "/server.log");
+  EXPECT_NE(after.find("\"b\""), std::string::npos) << after;
+  browser.evaluate("document.getElementById('visible').click(), 1");
+  after = listedUntil(true);
+  EXPECT_NE(after.find("Cam (spectator)"), std::string::npos)
+      << after << logOf(dir_ + "/server.log");
+  // The page goes: so does its member.
+  browser.evaluate("location.href = 'about:blank', 1");
+  after = listedUntil(false);
+  EXPECT_EQ(after.find("Cam (spectator)"), std::string::npos)
+      << after << logOf(dir_ + "/server.log");
+  bots.signal(SIGINT);
+  bots.wait(10.0);
+  server.signal(SIGTERM);
+  EXPECT_EQ(server.wait(10.0).value_or(-999), 0) << logOf(dir_ + "/server.log");
 }
 
 }  // namespace
