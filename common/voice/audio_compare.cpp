@@ -58,4 +58,16 @@ double levelDbfs(std::span<const float> samples) {
   return std::max(-120.0, 10.0 * std::log10(energy / static_cast<double>(samples.size())));
 }
 
+std::ptrdiff_t soundOnset(std::span<const float> samples, float threshold) {
+  constexpr std::size_t kWindow = 480;
+  for (std::size_t i = 0; i + kWindow <= samples.size(); i += kWindow / 2) {
+    double sum = 0.0;
+    for (std::size_t k = 0; k < kWindow; ++k) {
+      sum += static_cast<double>(samples[i + k]) * samples[i + k];
+    }
+    if (std::sqrt(sum / kWindow) > threshold) return static_cast<std::ptrdiff_t>(i);
+  }
+  return -1;
+}
+
 }  // namespace vistel

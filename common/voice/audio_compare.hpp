@@ -6,6 +6,7 @@
 // heard[i + lag] over their overlap. Cost: O(12000 * max_lag) for the search plus O(n).
 #pragma once
 
+#include <cstddef>
 #include <span>
 
 namespace vistel {
@@ -23,5 +24,9 @@ double correlationAtLag(std::span<const float> a, std::span<const float> b, int 
 
 // RMS level of a span in dB full scale (-120 for silence).
 double levelDbfs(std::span<const float> samples);
+
+// Where sound starts: the first sample of the first 10 ms window (480 samples at 48 kHz,
+// stepped by half a window) whose RMS exceeds `threshold` (linear full scale), or -1.
+std::ptrdiff_t soundOnset(std::span<const float> samples, float threshold);
 
 }  // namespace vistel

@@ -81,19 +81,32 @@ TriangleSoup weldVertices(const TriangleSoup& soup, float tolerance) {
   return out;
 }
 
-Result<TriangleSoup> readMeshFile(const std::string& path) {
+Result<TriangleSoup> readMeshFile(const std::string& path, std::vector<glm::vec2>* uvs) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) return fail("{}: no such file", path);
   ReadMesh mesh;
   OpenMesh::IO::Options options;
+  if (uvs != nullptr) {
+    mesh.request_vertex_texcoords2D();
+    options += OpenMesh::IO::Options::VertexTexCoord;
+  }
   if (!OpenMesh::IO::read_mesh(mesh, path, options)) {
     return fail("{}: OpenMesh could not read it (a .obj, .ply, .off or .stl mesh?)", path);
   }
   TriangleSoup soup;
+  const bool with_uvs = uvs != nullptr && options.vertex_has_texcoord();
+  if (uvs != nullptr) uvs->clear();
   soup.positions.reserve(mesh.n_vertices());
   for (const auto vh : mesh.vertices()) {
     const auto& p = mesh.point(vh);
     soup.positions.emplace_back(p[0], p[1], p[2]);
+    if (with_uvs) {
+      const auto& t = mesh.texcoord2D(vh);
+      if (!std::isfinite(t[0]) || !std::isfinite(t[1])) {
+        return fail("{}: a texture coordinate is not finite", path);
+      }
+      uvs->emplace_back(t[0], t[1]);
+    }
   }
   for (const auto fh : mesh.faces()) {
     std::vector<std::uint32_t> corners;

@@ -27,7 +27,8 @@ Status validateSoup(const TriangleSoup& soup);
 TriangleSoup weldVertices(const TriangleSoup& soup, float tolerance);
 
 // Reads a triangle mesh with OpenMesh's readers (.obj, .ply, .off, .stl); polygons are
-// triangulated as fans. Errors name the file and why.
-Result<TriangleSoup> readMeshFile(const std::string& path);
+// triangulated as fans. With `uvs`, also the per-vertex texture coordinates (left empty
+// when the file has none; a non-finite one is an error). Errors name the file and why.
+Result<TriangleSoup> readMeshFile(const std::string& path, std::vector<glm::vec2>* uvs = nullptr);
 
 }  // namespace vistel

@@ -2,12 +2,9 @@
 
 #include <bit>
 #include <cmath>
-#include <filesystem>
 #include <map>
 #include <unordered_map>
 
-#include <OpenMesh/Core/IO/MeshIO.hh>
-#include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/System/omstream.hh>
 
 namespace vistel {
@@ -61,43 +58,11 @@ PartMesh makePartMesh(TriangleSoup mesh, std::vector<glm::vec2> uvs) {
 }
 
 Result<PartMesh> readPartMesh(const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) return fail("{}: no such file", path);
-  OpenMesh::PolyMesh_ArrayKernelT<> mesh;
-  mesh.request_vertex_texcoords2D();
-  OpenMesh::IO::Options options;
-  options += OpenMesh::IO::Options::VertexTexCoord;
   omlog().disable();
-  if (!OpenMesh::IO::read_mesh(mesh, path, options)) {
-    return fail("{}: OpenMesh could not read it (a .obj, .ply, .off or .stl mesh?)", path);
-  }
-  TriangleSoup soup;
   std::vector<glm::vec2> uvs;
-  const bool with_uvs = options.vertex_has_texcoord();
-  soup.positions.reserve(mesh.n_vertices());
-  for (const auto vh : mesh.vertices()) {
-    const auto& p = mesh.point(vh);
-    soup.positions.emplace_back(p[0], p[1], p[2]);
-    if (with_uvs) {
-      const auto& t = mesh.texcoord2D(vh);
-      uvs.emplace_back(t[0], t[1]);
-    }
-  }
-  for (const auto fh : mesh.faces()) {
-    std::vector<std::uint32_t> corners;
-    for (const auto vh : mesh.fv_range(fh)) corners.push_back(static_cast<std::uint32_t>(vh.idx()));
-    for (std::size_t i = 1; i + 1 < corners.size(); ++i) {
-      soup.indices.insert(soup.indices.end(), {corners[0], corners[i], corners[i + 1]});
-    }
-  }
-  if (soup.indices.empty()) return fail("{}: no faces", path);
-  if (Status st = validateSoup(soup); !st) return fail("{}: {}", path, st.error().message);
-  for (const glm::vec2& t : uvs) {
-    if (!std::isfinite(t.x) || !std::isfinite(t.y)) {
-      return fail("{}: a texture coordinate is not finite", path);
-    }
-  }
-  return makePartMesh(std::move(soup), std::move(uvs));
+  Result<TriangleSoup> soup = readMeshFile(path, &uvs);
+  if (!soup) return soup.error();
+  return makePartMesh(std::move(*soup), std::move(uvs));
 }
 
 std::vector<BoundaryLoop> boundaryLoops(const PartMesh& part) {

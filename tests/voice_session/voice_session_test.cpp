@@ -51,17 +51,6 @@ using Child = test::Program;
 
 using test::logOf;
 
-// The first sample whose 10 ms RMS passes `threshold`, or -1.
-std::ptrdiff_t onset(std::span<const float> x, float threshold) {
-  constexpr std::size_t kWindow = 480;
-  for (std::size_t i = 0; i + kWindow <= x.size(); i += kWindow / 2) {
-    double sum = 0.0;
-    for (std::size_t k = 0; k < kWindow; ++k) sum += static_cast<double>(x[i + k]) * x[i + k];
-    if (std::sqrt(sum / kWindow) > threshold) return static_cast<std::ptrdiff_t>(i);
-  }
-  return -1;
-}
-
 // What a listener wrote, against what was said: the ear nearer the speaker (the far ear is
 // shadowed and delayed by design), aligned coarsely by onsets, then exactly within 50 ms.
 struct Heard {
@@ -84,8 +73,8 @@ Heard compareHeard(const std::vector<float>& reference, const AudioClip& heard) 
   out.left_db = levelDbfs(left);
   out.right_db = levelDbfs(right);
   const std::vector<float>& near = out.left_db >= out.right_db ? left : right;
-  const std::ptrdiff_t said_at = onset(reference, 0.01f);
-  const std::ptrdiff_t heard_at = onset(near, 0.005f);
+  const std::ptrdiff_t said_at = soundOnset(reference, 0.01f);
+  const std::ptrdiff_t heard_at = soundOnset(near, 0.005f);
   if (said_at < 0 || heard_at < 0) return out;
   constexpr std::ptrdiff_t kSlack = 2400;
   const std::ptrdiff_t from = std::max<std::ptrdiff_t>(0, heard_at - said_at - kSlack);

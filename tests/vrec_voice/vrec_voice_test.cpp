@@ -42,17 +42,6 @@ namespace {
 using test::logOf;
 using test::Program;
 
-// The first sample whose 10 ms RMS passes threshold, or -1.
-std::ptrdiff_t onset(std::span<const float> x, float threshold) {
-  constexpr std::size_t kWindow = 480;
-  for (std::size_t i = 0; i + kWindow <= x.size(); i += kWindow / 2) {
-    double sum = 0.0;
-    for (std::size_t k = 0; k < kWindow; ++k) sum += static_cast<double>(x[i + k]) * x[i + k];
-    if (std::sqrt(sum / kWindow) > threshold) return static_cast<std::ptrdiff_t>(i);
-  }
-  return -1;
-}
-
 // "...<key> X ms..." in a log: X, or NaN.
 double numberAfter(const std::string& log, const std::string& key) {
   const std::size_t at = log.find(key);
@@ -210,7 +199,7 @@ TEST_F(VrecVoice, ReplayedTakeSpeaksAsRecordedInStepWithItsMotion) {
       << wav_bot.log();
   const double wav_onset_ms = numberAfter(wav_bot.log(), "voice onset ");
   const double said_onset_ms =
-      1e3 * static_cast<double>(std::max<std::ptrdiff_t>(0, onset(said.samples, 0.01f))) /
+      1e3 * static_cast<double>(std::max<std::ptrdiff_t>(0, soundOnset(said.samples, 0.01f))) /
       kVoiceSampleRate;
   std::printf(
       "[ measure  ] --voice with --recording: voice onset %.1f ms after the replay's first "
@@ -235,8 +224,8 @@ TEST_F(VrecVoice, ReplayedTakeSpeaksAsRecordedInStepWithItsMotion) {
     right[i] = heard->samples[2 * i + 1];
   }
   const std::vector<float>& near = levelDbfs(left) >= levelDbfs(right) ? left : right;
-  const std::ptrdiff_t heard_at = onset(near, 0.005f);
-  const std::ptrdiff_t said_at = onset(reference, 0.01f);
+  const std::ptrdiff_t heard_at = soundOnset(near, 0.005f);
+  const std::ptrdiff_t said_at = soundOnset(reference, 0.01f);
   ASSERT_GE(heard_at, 0) << "the observer heard nothing: " << ears.log();
   ASSERT_GE(said_at, 0);
   constexpr std::ptrdiff_t kSlack = 2400;
