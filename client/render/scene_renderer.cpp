@@ -395,7 +395,7 @@ void SceneRenderer::beginSkinnedLookMeshes(const EyeCamera& eye) const {
 
 void SceneRenderer::drawLookParts(const LookProgram& p, const GpuLook& look, const glm::mat4& model,
                                   const glm::vec3& tint, const GpuMesh* cpu, const GpuSkinMesh* gpu,
-                                  bool with_offsets) const {
+                                  bool with_offsets, LookPass which) const {
   const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(model)));
   glUniformMatrix4fv(p.model, 1, GL_FALSE, glm::value_ptr(model));
   glUniformMatrix3fv(p.normal_matrix, 1, GL_FALSE, glm::value_ptr(normal_matrix));
@@ -404,7 +404,9 @@ void SceneRenderer::drawLookParts(const LookProgram& p, const GpuLook& look, con
   // linear light, depth tested but not written, so they never hide what is behind).
   bool any_blend = false;
   for (const GpuLook::Part& part : look.parts()) any_blend = any_blend || part.blend;
-  for (int pass = 0; pass < (any_blend ? 2 : 1); ++pass) {
+  const int first = which == LookPass::kBlended ? 1 : 0;
+  const int last = which == LookPass::kOpaque || !any_blend ? 0 : 1;
+  for (int pass = first; pass <= last; ++pass) {
     const bool blend_pass = pass == 1;
     glUniform1i(p.blend, blend_pass ? 1 : 0);
     if (blend_pass) {
@@ -448,19 +450,20 @@ void SceneRenderer::drawLookPart(const LookProgram& p, const GpuLook::Part& part
 }
 
 void SceneRenderer::drawMeshLook(const GpuMesh& mesh, const GpuLook& look, const glm::mat4& model,
-                                 const glm::vec3& tint) const {
-  drawLookParts(look_program_, look, model, tint, &mesh, nullptr, false);
+                                 const glm::vec3& tint, LookPass pass) const {
+  drawLookParts(look_program_, look, model, tint, &mesh, nullptr, false, pass);
 }
 
 void SceneRenderer::drawSkinnedMeshLook(const GpuSkinMesh& mesh, const GpuLook& look,
                                         std::span<const DualQuat> skin, const glm::mat4& model,
-                                        const glm::vec3& tint, bool with_offsets) const {
+                                        const glm::vec3& tint, bool with_offsets,
+                                        LookPass pass) const {
   const int joints = mesh.jointCount();
   if (mesh.empty() || joints > kMaxGpuSkinJoints || static_cast<int>(skin.size()) < joints) {
     return;
   }
   glUniform4fv(gpu_look_program_.joints, 2 * joints, &skin[0].real.x);
-  drawLookParts(gpu_look_program_, look, model, tint, nullptr, &mesh, with_offsets);
+  drawLookParts(gpu_look_program_, look, model, tint, nullptr, &mesh, with_offsets, pass);
 }
 
 glm::mat4 SceneRenderer::shadowProjection(float height) {

@@ -10,8 +10,10 @@
 // is computed in linear light and written linear (the target encodes it). Normal maps use
 // a tangent frame from screen-space derivatives (no tangents needed). alphaMode MASK
 // discards below the cutoff; BLEND parts are drawn after the mesh's other parts, alpha
-// blended (in linear light), depth tested but not written (per mesh: a caller that wants
-// blended parts behind later meshes right draws blended meshes last, far to near).
+// blended (in linear light), depth tested but not written. A look draw takes a LookPass:
+// kAll draws one mesh's opaque parts then its blended ones; a room draws every mesh's
+// kOpaque parts first and then the kBlended parts far to near, so a blended part never
+// hides a mesh drawn after it.
 //
 // Shadows: planar projected shadows of the key light (Blinn 1988): each mesh drawn again,
 // flattened onto the floor plane y = 0 along the light, as a translucent dark overlay
@@ -75,13 +77,16 @@ class SceneRenderer {
   // any number of draws of that kind; the mesh must carry the look's texture
   // coordinates (attachUvs) when it has any. tint: multiplies the base colour (linear;
   // white keeps the look as authored). Other draws need their begin call again after.
+  // pass: which of the look's parts (LookPass, above).
+  enum class LookPass { kAll, kOpaque, kBlended };
   void beginLookMeshes(const EyeCamera& eye) const;
   void drawMeshLook(const GpuMesh& mesh, const GpuLook& look, const glm::mat4& model,
-                    const glm::vec3& tint) const;
+                    const glm::vec3& tint, LookPass pass = LookPass::kAll) const;
   void beginSkinnedLookMeshes(const EyeCamera& eye) const;
   void drawSkinnedMeshLook(const GpuSkinMesh& mesh, const GpuLook& look,
                            std::span<const DualQuat> skin, const glm::mat4& model,
-                           const glm::vec3& tint, bool with_offsets = false) const;
+                           const glm::vec3& tint, bool with_offsets = false,
+                           LookPass pass = LookPass::kAll) const;
 
   // Shadows on the floor (y = 0): after drawFloor and before the meshes, beginShadows (or
   // beginSkinnedShadows), any number of shadow draws, then endShadows. The draws take the
@@ -114,7 +119,7 @@ class SceneRenderer {
   // Draws each part of `look` from `cpu` (a GpuMesh) or else `gpu` (a GpuSkinMesh).
   void drawLookParts(const LookProgram& p, const GpuLook& look, const glm::mat4& model,
                      const glm::vec3& tint, const GpuMesh* cpu, const GpuSkinMesh* gpu,
-                     bool with_offsets) const;
+                     bool with_offsets, LookPass which) const;
   void drawLookPart(const LookProgram& p, const GpuLook::Part& part, const GpuMesh* cpu,
                     const GpuSkinMesh* gpu, bool with_offsets) const;
   void beginShadow(const ShadowProgram& p, const EyeCamera& eye) const;

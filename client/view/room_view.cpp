@@ -128,6 +128,7 @@ struct RoomView::Impl final : WorkerPool::Job {
   std::string backend;
   WorkerPool pool;
   std::vector<std::unique_ptr<MemberSlot>> slots;
+  std::vector<std::pair<float, MemberSlot*>> looks_by_depth;  // drawFrame's, reused
   std::unique_ptr<RenderTarget> target;
   std::unique_ptr<SceneRenderer> scene;
   std::unique_ptr<LabelRenderer> labels;
@@ -636,18 +637,36 @@ void RoomView::Impl::drawFrame() {
     }
     if (any_look) {
       // A look is drawn as authored (no member tint: the markers and tags tell members apart).
+      // Every member's opaque parts first, then the blended parts far to near, so a blended
+      // part (hair cards, glasses) never hides a member drawn after it.
       const glm::vec3 white(1.0f);
-      scene->beginLookMeshes(eye);
+      looks_by_depth.clear();
       for (const auto& slot : slots) {
-        if (!slot->has_front || slot->look.empty() || slot->shown().gpu) continue;
-        scene->drawMeshLook(slot->mesh, slot->look, slot->shown().placement, white);
+        if (!slot->has_front || slot->look.empty()) continue;
+        const glm::vec3 at(slot->shown().placement[3]);
+        looks_by_depth.push_back({glm::distance(at, eye.position), slot.get()});
       }
-      if (any_gpu) {
-        scene->beginSkinnedLookMeshes(eye);
-        for (const auto& slot : slots) {
-          if (!slot->has_front || slot->look.empty() || !slot->shown().gpu) continue;
-          scene->drawSkinnedMeshLook(slot->gpu_mesh, slot->look, slot->shown().dq,
-                                     slot->shown().placement, white, slot->shown().has_offsets);
+      std::sort(looks_by_depth.begin(), looks_by_depth.end(),
+                [](const auto& a, const auto& b) { return a.first > b.first; });
+      using Pass = SceneRenderer::LookPass;
+      for (const Pass pass : {Pass::kOpaque, Pass::kBlended}) {
+        for (const bool gpu : {false, true}) {
+          if (gpu && !any_gpu) continue;
+          if (gpu) {
+            scene->beginSkinnedLookMeshes(eye);
+          } else {
+            scene->beginLookMeshes(eye);
+          }
+          for (const auto& [depth, slot] : looks_by_depth) {
+            if (slot->shown().gpu != gpu) continue;
+            if (gpu) {
+              scene->drawSkinnedMeshLook(slot->gpu_mesh, slot->look, slot->shown().dq,
+                                         slot->shown().placement, white, slot->shown().has_offsets,
+                                         pass);
+            } else {
+              scene->drawMeshLook(slot->mesh, slot->look, slot->shown().placement, white, pass);
+            }
+          }
         }
       }
     }

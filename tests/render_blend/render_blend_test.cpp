@@ -79,6 +79,48 @@ TEST_P(RenderBlend, BlendedMaterialsMixWithWhatIsBehindInLinearLight) {
   EXPECT_LT(blended.r, opaque.r - 10);
 }
 
+// Two members: the first a blended red box, the second an opaque one behind it. Drawn in
+// member order the blended box (depth not written) would be painted over by the box behind;
+// every member's opaque parts first, then the blended ones far to near, keep the mix.
+TEST_P(RenderBlend, ABlendedMemberDoesNotHideAMemberDrawnAfterIt) {
+  ViewOptions o;
+  o.width = 320;
+  o.height = 240;
+  o.offscreen = true;
+  o.show_tags = false;
+  o.gpu_skinning = GetParam();
+  o.shadows = false;
+  o.msaa_samples = 4;
+  VISTEL_MAKE_VIEW(view, o);
+  const glm::vec3 red(0.8f, 0.05f, 0.05f);
+  const glm::vec3 green(0.05f, 0.7f, 0.1f);
+  auto back = box(glm::vec4(green, 1.0f), AlphaMode::kOpaque);
+  const glm::mat4 behind_it = glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, 0.0f, -0.6f));
+  const auto shoot = [&](float alpha, AlphaMode mode) {
+    auto front = box(glm::vec4(red, alpha), mode);
+    const std::vector<MemberView> members = {
+        MemberView{1, "", front, restPosture(front->skeleton), glm::mat4(1.0f), false},
+        MemberView{2, "", back, restPosture(back->skeleton), behind_it, false}};
+    view->render(members);
+    auto frame = view->readFrame();
+    EXPECT_TRUE(frame.ok()) << frame.error().message;
+    int x = 0, row = 0;
+    EXPECT_TRUE(test::pixelOf(view->lastCameras()[0], frame->height, {0.0f, 0.8f, 0.151f}, x, row));
+    const std::uint8_t* px = frame->pixel(x, row);
+    return glm::ivec3(px[0], px[1], px[2]);
+  };
+  const glm::ivec3 opaque = shoot(1.0f, AlphaMode::kOpaque);
+  const glm::ivec3 behind = shoot(0.4f, AlphaMode::kMask);  // the green box shows through
+  const glm::ivec3 blended = shoot(0.4f, AlphaMode::kBlend);
+  std::printf("[ measure  ] opaque (%d %d %d), behind (%d %d %d), blended (%d %d %d)\n", opaque.r,
+              opaque.g, opaque.b, behind.r, behind.g, behind.b, blended.r, blended.g, blended.b);
+  ASSERT_GT(behind.g, opaque.g + 40) << "the green box is behind the red one";
+  for (int c = 0; c < 3; ++c) {
+    const int want = encode(0.4 * decode(opaque[c]) + 0.6 * decode(behind[c]));
+    EXPECT_NEAR(blended[c], want, 4) << "channel " << c;
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(CpuAndGpuSkinning, RenderBlend, ::testing::Values(false, true),
                          [](const auto& p) { return p.param ? "Gpu" : "Cpu"; });
 
