@@ -284,18 +284,21 @@ Result<PostureSolver> PostureSolver::create(const Skeleton& skeleton, const Join
     leg.frame_c_inv = glm::inverse(frameQuat(d1, left));
     leg.shin_frame_c_inv = glm::inverse(frameQuat(d2, left));
     leg.foot_from_hips_c = pf - s.pos_c_[static_cast<std::size_t>(s.hips_)];
-    // With a foot station: the knee's side of the hip-ankle line, kept in the foot's frame
-    // (the knee points where the foot points): from the calibration knee when it is bent
-    // enough to say, else forward (and a little up, as the heuristic's).
+    // With a foot station: the knee's hinge axis, kept in the foot's frame (the ankle flexes
+    // about much the same axis as the knee, so the foot's pitch leaves it alone): from the
+    // calibration knee when it is bent (forward) enough to say, else across the knee's
+    // forward side (forward and a little up, as the heuristic's).
     const glm::vec3 axis = glm::normalize(pf - pt);
     const glm::vec3 perp = (pk - pt) - axis * glm::dot(pk - pt, axis);
-    const glm::vec3 pole = glm::length(perp) > 0.02f * leg.upper_len
-                               ? glm::normalize(perp)
-                               : glm::normalize(s.body_c_.forward + kUp * 0.1f);
-    leg.pole_foot = glm::inverse(s.world_c_[static_cast<std::size_t>(leg.foot)]) * pole;
+    const glm::vec3 forward_pole = glm::normalize(s.body_c_.forward + kUp * 0.1f);
+    const glm::vec3 pole =
+        glm::length(perp) > 0.02f * leg.upper_len && glm::dot(perp, s.body_c_.forward) > 0.0f
+            ? glm::normalize(perp)
+            : forward_pole;
     glm::vec3 v = pole - axis * glm::dot(pole, axis);
     v = glm::length(v) > 1e-6f ? glm::normalize(v) : anyPerpendicular(axis);
     const glm::vec3 hinge = glm::normalize(glm::cross(v, axis));
+    leg.hinge_foot = glm::inverse(s.world_c_[static_cast<std::size_t>(leg.foot)]) * hinge;
     leg.tracked_frame_c_inv = glm::inverse(frameQuat(d1, hinge));
     leg.tracked_shin_frame_c_inv = glm::inverse(frameQuat(d2, hinge));
   }
@@ -654,24 +657,28 @@ void PostureSolver::solveTrackedLeg(int side, float dt, const glm::quat& w_foot,
     const float d_soft = reach - soft + soft * (1.0f - std::exp(-(d - (reach - soft)) / soft));
     to_target *= d_soft / d;
   }
-  // The knee's side (the swivel, the direction across the hip-ankle line): toward where the
-  // foot points. Where the foot points along that line (a pointed toe in a kick) the side is
-  // ill-defined, so the swivel turns at most max_knee_swivel_deg_s from the last frame's
-  // instead of flipping.
+  // The knee's side (the swivel, the direction across the hip-ankle line): the knee bends
+  // about the foot's own left-right axis (the knee's hinge at calibration, carried by the
+  // foot). A direction kept in the foot's frame (where the toes point) would turn with the
+  // ankle's flexion: a pointed or raised foot swung it through the hip-ankle line, 90-180
+  // degrees off in the CMU 131 kicks and dance steps, and the knee popped across. The hinge
+  // is ill-defined only where it lies along the hip-ankle line (the leg swung out sideways
+  // with the foot across it): there the swivel holds the last frame's, and it never turns
+  // faster than max_knee_swivel_deg_s.
   glm::vec3 axis = to_target;
   axis = glm::length(axis) > 1e-6f ? glm::normalize(axis) : -kUp;
-  const glm::vec3 pole = w_foot * leg.pole_foot;
-  glm::vec3 v = pole - axis * glm::dot(pole, axis);
-  v = glm::length(v) > 1e-6f ? glm::normalize(v) : anyPerpendicular(axis);
-  if (leg.swivel_init && dt > 0.0f) {
+  glm::vec3 v = glm::cross(axis, w_foot * leg.hinge_foot);
+  const float across = glm::length(v);  // sine of the hinge's angle to the hip-ankle line
+  v = across > 1e-6f ? v / across : anyPerpendicular(axis);
+  if (leg.swivel_init) {
     glm::vec3 prev = leg.swivel - axis * glm::dot(leg.swivel, axis);
     if (glm::length(prev) > 1e-4f) {
       prev = glm::normalize(prev);
-      const float angle = std::atan2(glm::dot(glm::cross(prev, v), axis), glm::dot(prev, v));
+      float angle = std::atan2(glm::dot(glm::cross(prev, v), axis), glm::dot(prev, v));
+      angle *= smoothstep(std::sin(glm::radians(10.0f)), std::sin(glm::radians(30.0f)), across);
       const float step = glm::radians(options_.max_knee_swivel_deg_s) * dt;
-      if (std::abs(angle) > step) {
-        v = glm::angleAxis(angle > 0.0f ? step : -step, axis) * prev;
-      }
+      angle = std::clamp(angle, -step, step);
+      v = glm::angleAxis(angle, axis) * prev;
     }
   }
   leg.swivel = v;

@@ -24,9 +24,10 @@
 //    forearm takes the sensor's rotation; the hand adds the glove's wrist pitch/yaw;
 //  - fingers: glove flexion and abduction angles, about axes from the calibration hand;
 //  - legs: a leg whose foot station is worn (calibrated) and tracked is a two-bone IK from
-//    the hip to the ankle the foot sensor gives, the knee swivelled toward where the foot
-//    points (that direction fixed in the foot's frame at calibration; the swivel turns at
-//    most max_knee_swivel_deg_s, so a foot pointing along the leg cannot flip the knee), the
+//    the hip to the ankle the foot sensor gives, the knee bending about the foot's left-right
+//    axis (the knee's hinge at calibration, fixed in the foot's frame: the ankle's flexion
+//    leaves it alone; the swivel turns at most max_knee_swivel_deg_s and holds where that axis
+//    lies along the leg, so it cannot flip the knee), the
 //    foot taking the sensor's rotation; the stance does not matter then. Otherwise standing — feet
 //    planted, re-planted under the hips after a step's distance or turn, two-bone IK with knees
 //    forward; seated — thighs forward, shins down. Without foot stations the legs are
@@ -78,12 +79,18 @@ inline std::array<StationFilterParams, kBodySiteCount> defaultStationFilters() {
   chest.position_cutoff_hz = 1.5f;
   chest.orientation_cutoff_hz = 1.5f;
   chest.position_beta = 5.0f;
-  // Feet (filtered at the ankle): still while planted, fast in a step: 1 Hz rising by 10 Hz per
-  // m/s (a short look at 01_01 and the bow and call clips; a planted foot's noise reaches the
-  // knee of a nearly straight leg many times over).
+  // Feet (filtered at the ankle): still while planted, fast in a step: 1 Hz rising by 20 Hz per
+  // m/s (a planted foot's noise reaches the knee of a nearly straight leg many times over), and
+  // the output 25 ms behind the asked time: about one reading interval at the 40 Hz a foot gets
+  // when six stations share 240 Hz, so the foot is interpolated between its readings rather
+  // than extrapolated past the newest. A kick's foot reverses at 3-5 m/s; extrapolated over a
+  // reading's age it overshot by 10-25 cm and came back (CMU 131 clips, bench_posture
+  // /sensors:6: largest jump 1.6-2.4x the clip's, 1.1-1.4x with the delay; legs MPJPE and the
+  // jitter a little lower, on the gesture clips too, than at 1 Hz + 10 Hz per m/s undelayed).
   for (BodySite foot : {BodySite::kLeftFoot, BodySite::kRightFoot}) {
     f[static_cast<std::size_t>(foot)].position_cutoff_hz = 1.0f;
-    f[static_cast<std::size_t>(foot)].position_beta = 10.0f;
+    f[static_cast<std::size_t>(foot)].position_beta = 20.0f;
+    f[static_cast<std::size_t>(foot)].delay_s = 0.025;
   }
   return f;
 }
@@ -119,10 +126,11 @@ struct SolverOptions {
   float step_distance_m = 0.25f;  // standing: re-plant a foot when its target moves this far
   float step_turn_deg = 35.0f;    // ... or the pelvis turns this far
   double step_time_s = 0.3;
-  // Foot trackers: the most the knee's swivel about the hip-ankle line turns per second (a
-  // foot pointing along that line, as in a kick, leaves the swivel ill-defined: no flips).
-  // 360 did a little better than 720-3000 on the CMU 131 clips (legs MPJPE, jitter, jump).
-  float max_knee_swivel_deg_s = 360.0f;
+  // Foot trackers: the most the knee's swivel about the hip-ankle line turns per second (the
+  // swivel comes from the foot's left-right axis, ill-defined where that lies along the line:
+  // no flips). 720 did a little better than 180-360 and as well as 1500 on the CMU 131 clips
+  // (legs MPJPE, jitter, jump).
+  float max_knee_swivel_deg_s = 720.0f;
 };
 
 class PostureSolver {
@@ -198,9 +206,9 @@ class PostureSolver {
     glm::quat frame_c_inv{1.0f, 0.0f, 0.0f, 0.0f};  // thigh IK frame at calibration
     glm::quat shin_frame_c_inv{1.0f, 0.0f, 0.0f, 0.0f};
     glm::vec3 foot_from_hips_c{0.0f};  // calibration, model space
-    // With a foot station: the knee's side in the foot's frame, and the IK frames at
+    // With a foot station: the knee's hinge axis in the foot's frame, and the IK frames at
     // calibration built with it.
-    glm::vec3 pole_foot{0.0f, 0.0f, 1.0f};
+    glm::vec3 hinge_foot{1.0f, 0.0f, 0.0f};
     glm::quat tracked_frame_c_inv{1.0f, 0.0f, 0.0f, 0.0f};
     glm::quat tracked_shin_frame_c_inv{1.0f, 0.0f, 0.0f, 0.0f};
     glm::vec3 swivel{0.0f};  // last frame's knee side (unit, across the hip-ankle line)
