@@ -318,6 +318,60 @@ Result<AvatarModel> synthesizeAvatar(const PartsManifest& manifest,
     rep.part_vertices = kept_parts;
   }
 
+  // Simplified where flat: collapses that remove region vertices (and, when asked, part
+  // vertices away from the rims), the survivors' attributes as they are.
+  rep.undecimated_vertices = static_cast<int>(skin.positions.size());
+  rep.undecimated_triangles = static_cast<int>(skin.indices.size() / 3);
+  if (options.decimation.max_error_m > 0.0f) {
+    const auto part_vertices = static_cast<std::uint32_t>(rep.part_vertices);
+    const auto part_indices = static_cast<std::size_t>(3 * rep.part_triangles);
+    std::vector<std::uint8_t> removable(skin.positions.size(), 0);
+    for (std::size_t v = part_vertices; v < removable.size(); ++v) removable[v] = 1;
+    if (options.decimate_parts) {
+      std::vector<char> on_region(skin.positions.size(), 0);
+      for (std::size_t i = part_indices; i < skin.indices.size(); ++i)
+        on_region[skin.indices[i]] = 1;
+      for (std::uint32_t v = 0; v < part_vertices; ++v) removable[v] = on_region[v] == 0 ? 1 : 0;
+    }
+    Result<DecimatedMesh> d =
+        decimateMesh(skin.positions, skin.indices, removable, options.decimation);
+    if (!d) return fail("decimating the skin: {}", d.error().message);
+    std::vector<glm::vec3> positions(d->kept.size());
+    std::vector<Influences> kept_weights(d->kept.size());
+    std::vector<glm::vec2> kept_uvs(with_uvs ? d->kept.size() : 0);
+    int kept_parts = 0;
+    for (std::size_t v = 0; v < d->kept.size(); ++v) {
+      const std::uint32_t old = d->kept[v];
+      positions[v] = skin.positions[old];
+      kept_weights[v] = std::move(weights[old]);
+      if (with_uvs) kept_uvs[v] = uvs[old];
+      kept_parts += old < part_vertices ? 1 : 0;
+    }
+    // Each seam's region triangles renumbered (those collapsed away dropped).
+    std::vector<std::uint32_t> now(skin.indices.size() / 3, UINT32_MAX);
+    int kept_part_triangles = 0;
+    for (std::size_t t = 0; t < d->origin.size(); ++t) {
+      now[d->origin[t]] = static_cast<std::uint32_t>(t);
+      kept_part_triangles += 3 * d->origin[t] < part_indices ? 1 : 0;
+    }
+    for (SeamReport& seam : rep.seams) {
+      std::vector<std::uint32_t> region;
+      for (const std::uint32_t t : seam.region_triangles) {
+        if (now[t] != UINT32_MAX) region.push_back(now[t]);
+      }
+      seam.region_triangles = std::move(region);
+    }
+    skin.positions = std::move(positions);
+    skin.indices = std::move(d->indices);
+    weights = std::move(kept_weights);
+    if (with_uvs) uvs = std::move(kept_uvs);
+    rep.part_vertices = kept_parts;
+    rep.part_triangles = kept_part_triangles;
+    rep.region_vertices = static_cast<int>(skin.positions.size()) - kept_parts;
+    rep.region_triangles = static_cast<int>(skin.indices.size() / 3) - kept_part_triangles;
+    rep.collapses = d->collapses;
+  }
+
   // The skin: weights in the source's slots, normals, and the look.
   const std::size_t total = skin.positions.size();
   skin.influences = with_skin ? source.skin.influences : 4;

@@ -4,8 +4,11 @@
 // (seam_loft.hpp: rings on Hermite curves leaving each part along its surface, zipped onto
 // both rims; a parent rim around several children is split first, shared_rim.hpp), and
 // the regions' new vertices are evened out by Taubin smoothing, so that the parts and the
-// regions make one closed 2-manifold skin when every rim is paired. The part vertices stay
-// where they are; the skeleton is the source's.
+// regions make one closed 2-manifold skin when every rim is paired. Then the skin is
+// simplified where flat (skin_decimation.hpp, SynthesisOptions::decimation): halfedge
+// collapses remove region vertices (and, with decimate_parts, part vertices off the rims)
+// within the error bound, closed, manifold and oriented as it was. The part vertices that
+// stay are where they were; the skeleton is the source's.
 //
 // Attributes: a part vertex takes the source skin's weights at its nearest surface point
 // (the weights the source has there), or weight 1 on its part's bone when the source has
@@ -28,6 +31,7 @@
 #include "offline/parts/parts_manifest.hpp"
 #include "offline/synthesize/part_mesh.hpp"
 #include "offline/synthesize/seam_loft.hpp"
+#include "offline/synthesize/skin_decimation.hpp"
 
 namespace vistel {
 
@@ -35,6 +39,10 @@ struct SynthesisOptions {
   LoftOptions loft;
   int spike_rounds = 2;     // rounds of trimRimSpikes on each part before lofting
   int fairing_rounds = 20;  // Taubin smoothing rounds over the regions' new vertices
+  // The result simplified where flat (skin_decimation.hpp): the regions' vertices, and
+  // with `decimate_parts` the parts' vertices off their rims too. max_error_m 0: none.
+  DecimationOptions decimation;
+  bool decimate_parts = false;
 };
 
 struct SeamReport {
@@ -57,6 +65,9 @@ struct SynthesisReport {
   int rims = 0;            // over all parts
   int rims_left_open = 0;  // not lofted: holes in the result
   int trimmed_spikes = 0;  // part triangles dropped along the rims (trimRimSpikes)
+  // Decimation: the counts above are the result's; these the skin's before it.
+  int undecimated_vertices = 0, undecimated_triangles = 0;
+  int collapses = 0;
 };
 
 // Reads the manifest's part files (in its order).

@@ -28,11 +28,12 @@ namespace vistel {
 namespace {
 
 // What the current synthesis achieves, with a little margin (issue 24 asks for no
-// crossing pairs and a Hausdorff distance of 5 mm in the bands: not met yet; measured:
-// default 0 pairs and 28.5 mm at the crotch, MakeHuman 8 pairs and 14.4 mm at the neck).
+// crossing pairs and a Hausdorff distance of 5 mm in the bands: not met yet; measured with
+// the regions decimated within 0.5 mm: default 0 pairs and 28.5 mm at the crotch,
+// MakeHuman 4 pairs (8 undecimated) and 14.4 mm at the neck).
 constexpr int kDefaultCrossings = 2;
 constexpr double kDefaultHausdorff = 0.032;
-constexpr int kMakeHumanCrossings = 12;
+constexpr int kMakeHumanCrossings = 6;
 constexpr double kMakeHumanHausdorff = 0.017;
 
 struct Judged {
@@ -210,9 +211,15 @@ TEST(Synthesize, DefaultAvatarRoundTrip) {
   expectClosedManifold(j);
   std::printf(
       "default round trip: %d region vertices, %d crossing pairs, Hausdorff %.2f mm, "
-      "mean %.3f mm\n",
+      "mean %.3f mm; decimated %d -> %d triangles\n",
       report.region_vertices, j.self_intersections, 1e3 * j.distance.hausdorff(),
-      1e3 * j.distance.mean());
+      1e3 * j.distance.mean(), report.undecimated_triangles,
+      static_cast<int>(out->skin.indices.size() / 3));
+  // The regions simplified where flat (measured: 19,814 -> 19,420 triangles).
+  EXPECT_GT(report.collapses, 100);
+  EXPECT_EQ(report.part_triangles + report.region_triangles,
+            static_cast<int>(out->skin.indices.size() / 3));
+  EXPECT_LT(static_cast<int>(out->skin.indices.size() / 3), report.undecimated_triangles);
   EXPECT_LE(j.self_intersections, kDefaultCrossings);
   EXPECT_LT(j.distance.hausdorff(), kDefaultHausdorff);
   // The parts' own vertices are where they were (1 um: the original's, exactly).
