@@ -196,7 +196,8 @@ struct DeformCounters {
 // Contact of this body with one partner body, from this body's own contact faces.
 struct BodyContact {
   int partner = -1;        // body index in the scene (may be this body: self-contact)
-  glm::dvec3 force{0.0};   // N on this body: sum over contact faces of -p * area * n
+  glm::dvec3 force{0.0};   // N on this body: the contact law (prop.hpp) integrated over
+                           // every face around the contact, -p_mean * skinned area * n
   double area = 0.0;       // m^2 of faces whose three vertices lie on the contact (each
                            // at most its skinned area: stretched faces count as the skin
                            // that was there)
@@ -229,7 +230,8 @@ struct DeformState {
   std::vector<float> memory;               // elastic memory: the contact offset kept by plastic
                                            // and viscoelastic vertices (nvert, m, <= 0)
   std::vector<std::int16_t> contact_body;  // partner body per vertex, -1 none (nvert)
-  std::vector<float> pressure;             // contact pressure per vertex (nvert), Pa
+  std::vector<float> pressure;             // contact pressure per vertex (nvert), Pa: k * depth
+                                           // plus the cores' (prop.hpp "The contact law")
   std::vector<float> depth;                // rigid-pose penetration per vertex (nvert), m
   std::vector<std::uint8_t> flags;         // kVertex* bits (nvert)
   std::vector<BodyContact> contacts;       // per partner body this frame

@@ -8,6 +8,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "common/deform/calibrate.hpp"
+#include "common/deform/collision_terms.hpp"
 #include "common/deform/posed_primitives.hpp"
 
 namespace vistel {
@@ -71,19 +72,82 @@ float seriesStiffness(float k_a, float k_b, float cap) {
   return std::min(k, cap);
 }
 
+// An overlap between the ball and a skin: its volume (m^3) and the area (m^2) of the surface
+// where they cross, projected on the contact's normal (dV/dd).
+struct Overlap {
+  float volume = 0.0f;
+  float area = 0.0f;
+};
+Overlap overlap(float d, float r, float rs);  // the lens of two spheres (below)
+
+// The quadrature of the ball's cap (capIntegral): kIntegralRings rings of kCapAzimuths points.
+constexpr int kIntegralRings = 8;
+constexpr int kCapAzimuths = 16;
+struct CapSamples {
+  std::array<float, kIntegralRings * kCapAzimuths> depth{};  // below the skin, m (> 0: inside)
+  std::array<float, kIntegralRings> element{};  // a point's area element, projected (m^2)
+};
+
 // One sampled contact of the ball's surface with a surface of local radius r_s.
 struct Touch {
   float depth = 0.0f;
   glm::vec3 normal{0.0f, 1.0f, 0.0f};  // from the surface towards the ball
   glm::vec3 closest{0.0f};             // nearest point of the primitive's skeleton
-  float reduced_radius = 0.0f;         // R* = R r_s / (R + r_s)
-  float core_depth = INFINITY;         // depth where the rigid core begins
+  float surface_radius = INFINITY;     // r_s, the skin's local radius (infinity: a plane)
+  float skin_radius = 0.0f;            // the skin's distance from the skeleton (m)
+  float body_core = INFINITY;          // depths where the body's core and the ball's begin
+  float ball_core = INFINITY;          // (contactCoreDepth), m
+  bool integrated = false;             // `cap` holds the cap's samples (capIntegral); else
+  CapSamples cap;                      // the lens of the ball and the r_s sphere
 };
 
 // Directions of the ball's lower cap sampled by capDepth: rings at these angles from the
 // point nearest the primitive's skeleton, kCapAzimuths points each.
 constexpr float kCapAngles[] = {0.1396f, 0.2793f, 0.4189f, 0.5585f, 0.6981f, 0.8378f};  // 8..48 deg
-constexpr int kCapAzimuths = 16;
+
+// How deep point q lies inside the primitive's skin, along its own ray from the skeleton
+// (metres; negative: outside).
+float skinDepth(const PosedPrimitive& p, const glm::vec3& q) {
+  float sc;
+  const glm::vec3 d = skeletonOffset(p.shape, q, sc);
+  // Skeleton units to metres: 1 for metric shapes, the local radius for cone-spheres.
+  const float units = sc > 0.0f ? 1.0f / sc : 1.0f;
+  const float w = skinWeight(p, q, d, sc);
+  return skinSurfaceDistance(p, w) * units - std::sqrt(glm::dot(d, d));
+}
+
+// The common pressure law's integral over the ball's cap facing the skeleton (direction
+// -normal), by quadrature: the sum over the cap's points inside the skin of their depth
+// (skinDepth) times the cap's area element, projected on the normal, i.e. the overlap volume
+// V, so that F = k V (prop.hpp); `area` gets the projected area of the points inside, dV/dd.
+// Midpoint rule on kIntegralRings rings of kCapAzimuths points from the ball's pole to
+// theta_max (radians), which should enclose the contact with some margin.
+void capIntegral(const PosedPrimitive& p, const glm::vec3& c, float r, const glm::vec3& normal,
+                 float theta_max, CapSamples& out) {
+  const glm::vec3 helper =
+      std::abs(normal.x) < 0.9f ? glm::vec3(1.0f, 0.0f, 0.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
+  const glm::vec3 e1 = glm::normalize(glm::cross(normal, helper));
+  const glm::vec3 e2 = glm::cross(normal, e1);
+  const float pi = std::numbers::pi_v<float>;
+  const float d_theta = theta_max / kIntegralRings;
+  const float d_phi = 2.0f * pi / kCapAzimuths;
+  for (int j = 0; j < kIntegralRings; ++j) {
+    const float theta = (static_cast<float>(j) + 0.5f) * d_theta;
+    const float ct = std::cos(theta), st = std::sin(theta);
+    // Projected on the normal: the ring's surface element r^2 sin dtheta dphi times cos.
+    out.element[static_cast<std::size_t>(j)] = r * r * st * ct * d_theta * d_phi;
+    for (int k = 0; k < kCapAzimuths; ++k) {
+      const float b = (static_cast<float>(k) + 0.5f * static_cast<float>(j & 1)) * d_phi;
+      const glm::vec3 q = c + r * (-ct * normal + st * (std::cos(b) * e1 + std::sin(b) * e2));
+      float sc;
+      const glm::vec3 d = skeletonOffset(p.shape, q, sc);
+      const float units = sc > 0.0f ? 1.0f / sc : 1.0f;
+      const float surface = skinSurfaceDistance(p, skinWeight(p, q, d, sc)) * units;
+      const auto i = static_cast<std::size_t>(j * kCapAzimuths + k);
+      out.depth[i] = surface - std::sqrt(glm::dot(d, d));
+    }
+  }
+}
 
 // How deep the deepest sampled point of the ball's cap facing the skeleton (direction
 // -normal) lies inside the primitive's skin, measured along that point's own ray from the
@@ -99,13 +163,7 @@ float capDepth(const PosedPrimitive& p, const glm::vec3& c, float r, const glm::
     for (int k = 0; k < kCapAzimuths; ++k) {
       const float b = 2.0f * std::numbers::pi_v<float> * static_cast<float>(k) / kCapAzimuths;
       const glm::vec3 q = c + r * (-ca * normal + sa * (std::cos(b) * e1 + std::sin(b) * e2));
-      float sc;
-      const glm::vec3 d = skeletonOffset(p.shape, q, sc);
-      // Skeleton units to metres: 1 for metric shapes, the local radius for cone-spheres.
-      const float units = sc > 0.0f ? 1.0f / sc : 1.0f;
-      const float w = skinWeight(p, q, d, sc);
-      const float depth = skinSurfaceDistance(p, w) * units - std::sqrt(glm::dot(d, d));
-      deepest = std::max(deepest, depth);
+      deepest = std::max(deepest, skinDepth(p, q));
     }
   }
   return deepest;
@@ -113,8 +171,7 @@ float capDepth(const PosedPrimitive& p, const glm::vec3& c, float r, const glm::
 
 // Contact of the ball (centre c, radius r) with one posed primitive's skin: its iso-surface
 // w_i F_i = T, w_i the calibrated skin weight (the bare F_i = T without one).
-bool touchPrimitive(const PosedPrimitive& p, const glm::vec3& c, float r, float core_fraction,
-                    Touch& t) {
+bool touchPrimitive(const PosedPrimitive& p, const glm::vec3& c, float r, Touch& t) {
   if (!p.collides) return false;
   const Bounds& b = p.bounds;  // the support contains the surface
   if (c.x < b.min.x - r || c.x > b.max.x + r || c.y < b.min.y - r || c.y > b.max.y + r ||
@@ -138,14 +195,24 @@ bool touchPrimitive(const PosedPrimitive& p, const glm::vec3& c, float r, float 
   // The skin is not an offset surface: where it stands out beside the centre's ray (a
   // nose, a heel, a shoulder blade) the ball meets it first. Sample the ball's lower cap
   // and take the deepest point inside the skin on its own ray.
-  if (p.skin_weight != nullptr && dist - r < p.reach)
-    depth = std::max(depth, capDepth(p, c, r, normal));
+  const bool skinned = p.skin_weight != nullptr && dist - r < p.reach;
+  if (skinned) depth = std::max(depth, capDepth(p, c, r, normal));
   if (!(depth > 0.0f)) return false;
+  // The skin's overlap with the ball by quadrature over the cap (the skin is no sphere),
+  // out to 1.5 times the angle where the lens of the r_s sphere ends, at least 20 degrees.
+  if (skinned) {
+    const Overlap lens = overlap(depth, r, r_s);
+    const float a = std::sqrt(std::max(lens.area, 0.0f) / std::numbers::pi_v<float>);
+    const float theta = std::asin(std::min(a / r, 1.0f));
+    capIntegral(p, c, r, normal,
+                std::min(std::max(1.5f * theta, 0.35f), 0.5f * std::numbers::pi_v<float>), t.cap);
+    t.integrated = true;
+  }
   t.depth = depth;
   t.normal = normal;
   t.closest = c - dist * t.normal;
-  t.reduced_radius = p.shape.kind == ShapeKind::kOffsetPolygon ? r : r * r_s / (r + r_s);
-  t.core_depth = (1.0f - core_fraction) * r_s;
+  t.surface_radius = p.shape.kind == ShapeKind::kOffsetPolygon ? INFINITY : r_s;
+  t.skin_radius = r_s;
   return true;
 }
 
@@ -173,30 +240,101 @@ glm::vec3 earlierPoint(const PosedPrimitive& now, const PosedPrimitive& before,
   return closest;
 }
 
-float contactArea(float d, float rr, float* slope) {
-  const float pi = std::numbers::pi_v<float>;
-  if (d < rr) {
-    *slope = 2.0f * pi * (rr - d);
-    return pi * d * (2.0f * rr - d);
-  }
-  *slope = 0.0f;
-  return pi * rr * rr;
+// Where a body reaches its core (contactCoreDepth) with a core fraction of its own.
+float coreDepthAt(float core_fraction, float skin_radius, float k_own, float k_other) {
+  const float share = shareOf(k_own, k_other);
+  return share > 0.0f ? (1.0f - core_fraction) * skin_radius / share : INFINITY;
 }
 
-// Contact force magnitude (N) at the touch's depth d: pressure k d (plus k_core (d - d_core)
-// past the core) over the disc area pi d (2 rr - d) (pi rr^2 beyond d = rr); and its
-// derivative in d.
-float contactForce(const Touch& t, float k, float k_core, float* slope) {
-  float da = 0.0f;
-  const float area = contactArea(t.depth, t.reduced_radius, &da);
-  float pressure = k * t.depth;
-  float dp = k;
-  if (t.depth > t.core_depth) {
-    pressure += k_core * (t.depth - t.core_depth);
-    dp += k_core;
+// The overlap of the ball (radius r) with the skin's local sphere (radius rs; infinity: a
+// plane) at interpenetration depth d (centres r + rs - d apart): its volume (m^3) and the area
+// of its disc, where the two surfaces cross (m^2), which is also dV/dd. Closed forms: the
+// spherical cap pi d^2 (3 r - d) / 3 against a plane; the lens
+// pi (r + rs - D)^2 (D^2 + 2 D (r + rs) - 3 (r - rs)^2) / (12 D) between spheres, D the
+// centres' distance, and the disc's radius a^2 = (4 D^2 r^2 - (D^2 - rs^2 + r^2)^2) / (4 D^2).
+// For d << the radii both tend to V = pi R* d^2, A = 2 pi R* d, R* = r rs / (r + rs).
+Overlap overlap(float d, float r, float rs) {
+  const double pi = std::numbers::pi;
+  Overlap o;
+  if (!(d > 0.0f)) return o;
+  const double dd = d, R = r;
+  if (!std::isfinite(rs)) {
+    const double h = std::min(dd, 2.0 * R);
+    o.volume = static_cast<float>(pi * h * h * (3.0 * R - h) / 3.0);
+    o.area = h < 2.0 * R ? static_cast<float>(pi * h * (2.0 * R - h)) : 0.0f;
+    return o;
   }
-  *slope = dp * area + pressure * da;
-  return pressure * area;
+  const double S = rs;
+  const double D = R + S - dd;
+  if (D <= std::abs(R - S)) {  // one inside the other
+    const double m = std::min(R, S);
+    o.volume = static_cast<float>(4.0 / 3.0 * pi * m * m * m);
+    return o;
+  }
+  const double gap = R + S - D;  // = d
+  o.volume = static_cast<float>(pi * gap * gap *
+                                (D * D + 2.0 * D * (R + S) - 3.0 * (R - S) * (R - S)) / (12.0 * D));
+  const double x = D * D - S * S + R * R;
+  o.area = static_cast<float>(std::max(0.0, pi * (4.0 * D * D * R * R - x * x) / (4.0 * D * D)));
+  return o;
+}
+
+// Contact force magnitude (N) at the touch's depth d, the common pressure law integrated over
+// the contact (see prop.hpp): k V, V the overlap (the cap's quadrature, or the lens), plus
+// k_core V_core past each core (the body's with k_core = the ball's stiffness against a rigid
+// body, the ball's with the body's); and its derivative in d (k A + ...), for the substeps.
+// `area` gets the contact's projected area.
+float contactForce(const Touch& t, float k, float k_body_core, float k_ball_core, float r,
+                   float core_fraction, float* slope, float* area) {
+  Overlap o;
+  if (t.integrated) {
+    // Point by point over the cap, as Step 3 on a mesh: the depth times the area element.
+    for (int j = 0; j < kIntegralRings; ++j) {
+      const float element = t.cap.element[static_cast<std::size_t>(j)];
+      for (int i = j * kCapAzimuths; i < (j + 1) * kCapAzimuths; ++i) {
+        const float d = t.cap.depth[static_cast<std::size_t>(i)];
+        if (!(d > 0.0f)) continue;
+        o.volume += d * element;
+        o.area += element;
+      }
+    }
+  } else {
+    o = overlap(t.depth, r, t.surface_radius);
+  }
+  float f = k * o.volume;
+  float df = k * o.area;
+  // The cores: past each, a second layer as stiff as the other body against a rigid one.
+  // Each core is a sphere of core_fraction times its body's radius meeting the other body's
+  // skin by the same law (a lens); the body's also on the cap's points, the larger of the two
+  // (the cap's points cannot see a part the ball has swallowed, a hand).
+  struct Core {
+    float depth, k, r_ball, r_body;
+    bool cap;
+  };
+  for (const Core& core :
+       {Core{t.body_core, k_body_core, r, core_fraction * t.surface_radius, true},
+        Core{t.ball_core, k_ball_core, core_fraction * r, t.surface_radius, false}}) {
+    if (!(t.depth > core.depth)) continue;
+    Overlap c = overlap(t.depth - core.depth, core.r_ball, core.r_body);
+    if (t.integrated && core.cap) {
+      Overlap q;
+      for (int j = 0; j < kIntegralRings; ++j) {
+        const float element = t.cap.element[static_cast<std::size_t>(j)];
+        for (int i = j * kCapAzimuths; i < (j + 1) * kCapAzimuths; ++i) {
+          const float d = t.cap.depth[static_cast<std::size_t>(i)] - core.depth;
+          if (!(d > 0.0f)) continue;
+          q.volume += d * element;
+          q.area += element;
+        }
+      }
+      if (q.volume > c.volume) c = q;
+    }
+    f += core.k * c.volume;
+    df += core.k * c.area;
+  }
+  *slope = df;
+  *area = o.area;
+  return f;
 }
 
 // Why a ball state is invalid, or null.
@@ -234,6 +372,39 @@ struct ContactTable {
 
 }  // namespace
 
+float contactCoreDepth(float skin_radius, float k_own, float k_other) {
+  return coreDepthAt(kCoreFraction, skin_radius, k_own, k_other);
+}
+
+float contactCorePressure(float depth, float pressure, float k_own, float own_radius,
+                          float partner_radius) {
+  if (!(depth > 0.0f) || !(pressure > 0.0f) || !std::isfinite(pressure) || !(k_own > 0.0f)) {
+    return 0.0f;
+  }
+  // The series stiffness k and the body's share s of the depth (shareOf): k = k_own s for a
+  // soft body, so s = k / k_own and the partner's stiffness k_other = k / (1 - s), rigid
+  // where s reaches 1; a rigid body takes no share (s = 0) and k = k_other.
+  const float k = pressure / depth;
+  float share = 0.0f;
+  float k_other = k;
+  if (!std::isinf(k_own)) {
+    share = std::min(k / k_own, 1.0f);
+    k_other = share > 0.999f ? kRigidStiffness : k / (1.0f - share);
+  }
+  float extra = 0.0f;
+  // The body's own core, stiffened by the partner's stiffness against a rigid one.
+  if (own_radius > 0.0f && share > 0.0f) {
+    const float core = (1.0f - kCoreFraction) * own_radius / share;
+    if (depth > core) extra += std::min(k_other, kMaxContactStiffness) * (depth - core);
+  }
+  // The partner's, stiffened by this body's.
+  if (partner_radius > 0.0f && share < 1.0f) {
+    const float core = (1.0f - kCoreFraction) * partner_radius / (1.0f - share);
+    if (depth > core) extra += std::min(k_own, kMaxContactStiffness) * (depth - core);
+  }
+  return extra;
+}
+
 Status validateBallState(const BallState& b) {
   if (const char* why = ballProblem(b)) return fail("ball: {}", why);
   return {};
@@ -257,16 +428,21 @@ BallStepReport stepBall(BallState& ball, std::span<const BodyView> bodies, float
   const float inv_interval = moving_bodies ? 1.0f / opt.previous_interval : 0.0f;
   const float r = ball.radius;
   const float e2 = ball.restitution * ball.restitution;
-  const float k_core = seriesStiffness(ball.stiffness, kRigidStiffness, opt.max_stiffness);
+  const float k_body_core = seriesStiffness(ball.stiffness, kRigidStiffness, opt.max_stiffness);
   glm::vec3 impulse(0.0f);
   float remaining = dt;
 
   // The force on the ball from one touch, accumulated into the table; returns the
   // touch's stiffness slope for the substep size.
-  const auto apply = [&](int body, int prim, const Touch& t, float k, const glm::vec3& v_surface,
+  const auto apply = [&](int body, int prim, Touch& t, float k_body, const glm::vec3& v_surface,
                          glm::vec3& force, float h, bool record) {
+    const float k = seriesStiffness(ball.stiffness, k_body, opt.max_stiffness);
+    t.body_core = coreDepthAt(opt.core_fraction, t.skin_radius, k_body, ball.stiffness);
+    t.ball_core = coreDepthAt(opt.core_fraction, r, ball.stiffness, k_body);
+    const float k_ball_core = seriesStiffness(k_body, kRigidStiffness, opt.max_stiffness);
     float slope = 0.0f;
-    float f = contactForce(t, k, k_core, &slope);
+    float area = 0.0f;
+    float f = contactForce(t, k, k_body_core, k_ball_core, r, opt.core_fraction, &slope, &area);
     if (glm::dot(ball.velocity - v_surface, t.normal) > 0.0f) f *= e2;  // separating
     const glm::vec3 fv = f * t.normal;
     force += fv;
@@ -277,8 +453,7 @@ BallStepReport stepBall(BallState& ball, std::span<const BodyView> bodies, float
         c->normal = t.normal;
         c->point = ball.position - r * t.normal;
         c->max_depth = std::max(c->max_depth, t.depth);
-        float unused = 0.0f;
-        c->area = contactArea(t.depth, t.reduced_radius, &unused);
+        c->area = area;
       }
     }
     return slope;
@@ -293,9 +468,9 @@ BallStepReport stepBall(BallState& ball, std::span<const BodyView> bodies, float
       t.depth = r - (ball.position.y - opt.floor_height);
       if (t.depth > 0.0f) {
         t.normal = glm::vec3(0.0f, 1.0f, 0.0f);
-        t.reduced_radius = r;
-        const float k = seriesStiffness(ball.stiffness, opt.floor_stiffness, opt.max_stiffness);
-        stiffness_sum += apply(kFloorBody, -1, t, k, glm::vec3(0.0f), force, h, record);
+        t.skin_radius = INFINITY;  // no core under the floor
+        stiffness_sum +=
+            apply(kFloorBody, -1, t, opt.floor_stiffness, glm::vec3(0.0f), force, h, record);
       }
     }
     for (std::size_t bi = 0; bi < bodies.size(); ++bi) {
@@ -312,14 +487,13 @@ BallStepReport stepBall(BallState& ball, std::span<const BodyView> bodies, float
       for (std::size_t pi = 0; pi < posed->items.size(); ++pi) {
         const PosedPrimitive& p = posed->items[pi];
         Touch t;
-        if (!touchPrimitive(p, c, r, opt.core_fraction, t)) continue;
+        if (!touchPrimitive(p, c, r, t)) continue;
         glm::vec3 v_surface(0.0f);
         if (before != nullptr) {
           v_surface = (t.closest - earlierPoint(p, before->items[pi], t.closest)) * inv_interval;
         }
-        const float k = seriesStiffness(ball.stiffness, p.stiffness, opt.max_stiffness);
-        stiffness_sum +=
-            apply(static_cast<int>(bi), static_cast<int>(pi), t, k, v_surface, force, h, record);
+        stiffness_sum += apply(static_cast<int>(bi), static_cast<int>(pi), t, p.stiffness,
+                               v_surface, force, h, record);
       }
     }
     return force;

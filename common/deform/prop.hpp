@@ -5,19 +5,39 @@
 // Ball dynamics (stepBall) use primitives only, no meshes, so a server that has just
 // skeletons, primitive sets and postures can step props: each posed primitive's surface is
 // its skin, w_i F_i = T with w_i its calibrated skin weight (skinSurfaceDistance: the bare
-// iso-surface at r_in without one), so a ball of radius R penetrates primitive i by
-// depth = r_s + R - dist(centre, skeleton), r_s the skin's distance on the ray through the
-// centre (cone-spheres: in their local profile scale), or more where the skin stands out
-// beside that ray (the deepest of 96 points sampled on the ball's cap facing the skeleton,
-// each on its own ray), and the body pushes back along the field's
-// gradient direction with pressure k * depth over the contact disc's area (as Step 3
-// measures forces on meshes): F = k * depth * 2 pi R* depth, R* = R r_s / (R + r_s) with
-// r_s the primitive's local surface radius, k the two materials' stiffnesses in series;
-// past (1 - core_fraction) r_s the ball reaches the primitive's rigid core (a bone) and
-// max_stiffness adds to k for the depth beyond it, so fast balls do not pass through.
+// iso-surface at r_in without one).
+//
+// The contact law, one model for the ball dynamics and for the forces Step 3 measures on the
+// deformed meshes (contact_forces.cpp), after Gascuel 1993's reaction pressure:
+//   pressure p(x) = k delta(x) + [cores],  force F = integral of p over the contact,
+// where delta(x) (m) is the rigid-pose interpenetration at a point of the contact: how deep
+// that point of one body's skin lies below the other's skin, measured on the other
+// primitive's ray through it (skinSurfaceDistance - skeleton distance); k (Pa/m) the two
+// materials' stiffnesses in series (k_a k_b / (k_a + k_b); a rigid side yields nothing, rigid
+// on rigid kMaxContactStiffness); the integral over the skinned (rigid-pose) contact surface,
+// so F (N) = k x the overlap volume (m^3) for a Winkler foundation. Cores: each body has a
+// rigid core (a bone; a ball's centre) at kCoreFraction of its skin's distance from its
+// skeleton; it takes its share of delta (relative deformability, shareOf), so it reaches its
+// core at delta_c = (1 - kCoreFraction) r / share (contactCoreDepth), and past it the pressure
+// gains k_core (delta - delta_c), k_core the other body's stiffness against a rigid one (at
+// most kMaxContactStiffness), so fast balls do not pass through.
+//   The dynamics integrate it over the ball's cap facing the primitive's skeleton: depths at
+// 8 rings x 16 points of the cap (each on its own ray) times their area elements projected on
+// the contact normal (a midpoint rule out to 1.5 times the contact's angle), so the skin's
+// real shape counts, not a sphere; the cores' layers by the lens of the core's sphere and the
+// other skin (the larger of lens and quadrature for the body's core, as the cap cannot see a
+// part the ball has swallowed, a hand). The normal is the field's gradient direction at the
+// ball's centre; the contact's depth (for detection, max_depth and the cores) the deepest
+// of the centre's ray and 96 cap points (8..48 degrees).
+//   Step 3 sums the same law over the mesh: each contact vertex's pressure from its depth
+// below the partner's skin on the partner primitive's ray (exact for every profile) plus the
+// cores', linear over each face around the contact (zero at vertices not in contact), times
+// the face's skinned area, along the deformed face normal.
+// Measured on a ball bouncing on the default avatar's head and thigh (tests/deform/
+// bounce_force_test.cpp) the two agree within 10% per frame and 2% in impulse.
 // Restitution e: the force is scaled by e^2 while the ball separates from the surface
 // (relative normal velocity outward), so a bounce returns e^2 of the energy stored, i.e.
-// leaves at e times the impact speed.
+// leaves at e times the impact speed. Step 3 (no velocities) reports the elastic law.
 #pragma once
 
 #include <array>
@@ -77,6 +97,30 @@ Status validateBallState(const BallState& ball);
 // the same radius) as a body of Step 1: posePrimitives(set, {&placement, 1}, posed).
 glm::mat4 ballPlacement(const BallState& ball);
 
+// --- The contact law, shared by the ball dynamics and Step 3's mesh forces ---------------
+
+// A body's rigid core (a bone; a ball's centre): the inner kCoreFraction of its skin's
+// distance from its skeleton. Past it the contact stiffens by the partner's stiffness against
+// a rigid body, at most kMaxContactStiffness (which also caps rigid on rigid).
+inline constexpr float kCoreFraction = 0.5f;
+inline constexpr float kMaxContactStiffness = 1.0e7f;
+
+// The interpenetration depth (m) at which a body of stiffness k_own (Pa/m), whose skin lies
+// skin_radius m from its skeleton, reaches its core against a partner of stiffness k_other:
+// its own dent is its share of the depth (shareOf, relative deformability), so the core is
+// at (1 - kCoreFraction) skin_radius / share. Infinity for a rigid body (it takes no dent).
+float contactCoreDepth(float skin_radius, float k_own, float k_other);
+
+// The cores' extra pressure (Pa) at a mesh vertex of a body of stiffness k_own penetrating its
+// partner `depth` m in the rigid pose with the common law's pressure `pressure` = k depth (k
+// the series stiffness, from which the partner's stiffness is recovered); its skin lies
+// own_radius m from its skeleton, the partner's partner_radius m from the partner's (on the
+// same ray; 0: unknown, no core): past each body's core (contactCoreDepth) k_core (depth -
+// core depth), k_core the other body's stiffness against a rigid one, at most
+// kMaxContactStiffness. 0 before the cores and for bad input. Cost: a few operations.
+float contactCorePressure(float depth, float pressure, float k_own, float own_radius,
+                          float partner_radius);
+
 struct BallStepOptions {
   // m/s^2
   glm::vec3 gravity{0.0f, -9.81f, 0.0f};
@@ -86,8 +130,8 @@ struct BallStepOptions {
   float floor_stiffness = kRigidStiffness;
   // Cap on the series stiffness (rigid on rigid), Pa/m; also the stiffness of a
   // primitive's rigid core: its inner core_fraction of the surface radius (a bone).
-  float max_stiffness = 1.0e7f;
-  float core_fraction = 0.5f;
+  float max_stiffness = kMaxContactStiffness;
+  float core_fraction = kCoreFraction;
   // Substeps move the ball at most max_travel (m), last at most stability / omega of the
   // current contact (omega^2 = contact stiffness slope / mass), and number at most
   // max_substeps per call (beyond, the last substep takes the rest: report.saturated).
@@ -110,7 +154,8 @@ struct BallContact {
   glm::vec3 normal{0.0f};  // unit, from the surface towards the ball (last substep)
   glm::vec3 point{0.0f};   // contact point on the ball's surface (last substep), world
   float max_depth = 0.0f;  // deepest penetration during the step (m)
-  float area = 0.0f;       // contact disc area at the last substep in contact (m^2)
+  float area = 0.0f;       // contact area at the last substep in contact, projected on
+                           // the normal (m^2)
 };
 
 inline constexpr int kMaxBallContacts = 16;
@@ -132,8 +177,9 @@ struct BallStepReport {
 // a null posed set, and skip_body, are ignored). Semi-implicit Euler over adaptive
 // substeps (at most max_travel of motion each, and short against the contact's own
 // period), so results depend only on the inputs: deterministic, no allocation, cost
-// O(substeps * primitives near the ball). The body's posture is taken as constant over dt
-// (its surface velocity from options.previous when given).
+// O(substeps * primitives near the ball), each touching primitive about 2 x 224 skin-surface
+// evaluations (the cap's depth and quadrature) per substep. The body's posture is taken as constant
+// over dt (its surface velocity from options.previous when given).
 BallStepReport stepBall(BallState& ball, std::span<const BodyView> bodies, float dt,
                         const BallStepOptions& options = {});
 
