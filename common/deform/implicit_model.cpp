@@ -163,9 +163,15 @@ Status validateCalibration(const Calibration& c, const PrimitiveSet& s, int vert
       return fail("calibration: joint vertex {} lacks its two limbs", v);
     }
     if (!finitePositive(c.w[v])) return fail("calibration: vertex {} weight not positive", v);
-    if (c.rigid[v] > 1 ||
-        (c.rigid[v] == 1 && (c.vertex_class[v] != VertexClass::kLimb || p[3] >= 0))) {
+    if (c.rigid[v] > kRigidInner ||
+        (c.rigid[v] == kRigidLimb && (c.vertex_class[v] != VertexClass::kLimb || p[3] >= 0))) {
       return fail("calibration: vertex {} rigid flag invalid", v);
+    }
+    if (c.rigid[v] == kRigidInner &&
+        (c.vertex_class[v] != VertexClass::kFree || p[0] != kNoPrimitive || p[1] != kNoPrimitive ||
+         p[2] != kNoPrimitive || p[3] != kNoPrimitive ||
+         c.pair_offsets[v] != c.pair_offsets[v + 1])) {
+      return fail("calibration: inner-layer vertex {} has a class, primitive or pair", v);
     }
     if (!std::isfinite(c.slope[v]) || c.slope[v] < 0.0f ||
         (c.vertex_class[v] == VertexClass::kFree && !(c.slope[v] > 0.0f))) {

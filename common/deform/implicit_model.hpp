@@ -157,15 +157,23 @@ struct VertexPair {
   float iso = 0.5f;  // the pair's threshold (>= the set's iso)
 };
 
+// Calibration::rigid values.
+inline constexpr std::uint8_t kRigidLimb = 1;
+inline constexpr std::uint8_t kRigidInner = 2;  // a free vertex with no primitive and no pair:
+                                                // carried by its skinning alone, never
+                                                // deformed, never in contact
+
 struct Calibration {
   std::vector<VertexClass> vertex_class;           // (nvert)
   std::vector<std::array<std::int16_t, 4>> prims;  // (nvert) p0, p1, p2, bone; unused = -1
   std::vector<float> w;                            // (nvert) calibration weight w_v
   std::vector<float> slope;                        // (nvert) free vertices: own-field
                                                    // slope per metre (> 0); else 0
-  std::vector<std::uint8_t> rigid;                 // (nvert) 1: a limb vertex skinned
-                                                   // entirely by its primitive's bone, so
-                                                   // D_v cannot change while untouched
+  std::vector<std::uint8_t> rigid;                 // (nvert) kRigidLimb: a limb vertex
+                                                   // skinned entirely by its primitive's
+                                                   // bone, so D_v cannot change while
+                                                   // untouched; kRigidInner: an inner
+                                                   // layer (inner_layers.hpp); else 0
   std::vector<float> own_weight;                   // (nvert, or empty: all 1) the share of
                                                    // the vertex's skin weight carried by
                                                    // its own primitives' bones (see
