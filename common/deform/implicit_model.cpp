@@ -10,6 +10,11 @@ bool finitePositive(float x) { return std::isfinite(x) && x > 0.0f; }
 
 }  // namespace
 
+std::string_view primitivePart(std::string_view name) {
+  const std::size_t slash = name.find('/');
+  return slash == std::string_view::npos ? name : name.substr(0, slash);
+}
+
 float shapeWeight(const Density& density, float iso, float r_in, float r_out) {
   return iso / densityValue(density, r_in / r_out);
 }

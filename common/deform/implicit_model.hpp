@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "common/base/result.hpp"
@@ -202,6 +203,11 @@ Status validateCombinationGraph(const CombinationGraph& graph, const PrimitiveSe
 Status validateCalibration(const Calibration& calibration, const PrimitiveSet& set,
                            int vertex_count);
 Status validateImplicitModel(const ImplicitModel& model, int joint_count, int vertex_count);
+
+// The body part a primitive belongs to: its name up to the first '/' (the primitives
+// adoptFreeVertices adds for fingers, toes, the upper chest... are named "<part>/<joint>",
+// e.g. "l_hand/index_01_l"), else the whole name. Views into `name`.
+std::string_view primitivePart(std::string_view name);
 
 // Shape weight W so that the field equals iso on the offset surface at r_in.
 float shapeWeight(const Density& density, float iso, float r_in, float r_out);
