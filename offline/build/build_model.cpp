@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <map>
 
+#include "common/deform/inner_layers.hpp"
 #include "common/deform/posed_primitives.hpp"
 #include "offline/build/fit.hpp"
 
@@ -32,6 +33,7 @@ struct Builder {
   std::vector<int> group_of_joint;     // per avatar joint: owning limb (spec index) or -1
   std::map<std::pair<int, int>, int> joint_between;  // (limb, limb) -> joint spec index
   std::vector<Classified> classes;                   // per vertex
+  std::vector<std::uint8_t> inner;  // per vertex: on an inner layer (eyes, teeth; free, unfitted)
 
   int resolve(const std::string& canonical) const {
     if (canonical.empty()) return -1;
@@ -129,6 +131,8 @@ struct Builder {
     const auto k = static_cast<std::size_t>(m.influences);
     classes.assign(m.positions.size(), Classified{});
     for (std::size_t v = 0; v < m.positions.size(); ++v) {
+      // Inner layers are carried by their skinning alone: no primitive is fitted to them.
+      if (!inner.empty() && inner[v] != 0) continue;
       // Skin weight per limb group.
       std::pair<int, float> groups[kMaxInfluences];
       int ng = 0;
@@ -216,7 +220,7 @@ Result<ImplicitModel> buildImplicitModel(const AvatarModel& avatar, const Primit
   if (Status st = validateAvatar(avatar); !st)
     return withContext("building implicit model", st.error());
 
-  Builder b{avatar, spec, map, report, {}, {}, {}, {}, {}, {}};
+  Builder b{avatar, spec, map, report, {}, {}, {}, {}, {}, {}, {}};
   const Skeleton& sk = avatar.skeleton;
   const SkinMesh& mesh = avatar.skin;
   progress(0.0f, "classifying vertices");
@@ -224,6 +228,14 @@ Result<ImplicitModel> buildImplicitModel(const AvatarModel& avatar, const Primit
   for (int j = 0; j < sk.jointCount(); ++j) {
     b.joint_pos[static_cast<std::size_t>(j)] =
         glm::vec3(glm::inverse(sk.inverse_bind[static_cast<std::size_t>(j)])[3]);
+  }
+  // Inner layers (eyes, teeth, tongue) lie inside the skin: fitted to them, the head's
+  // primitive would lie inside its skin (inner_layers.hpp; computeRelaxationWeights marks
+  // them carried rigidly).
+  if (Result<InnerLayers> layers = findInnerLayers(mesh.positions, mesh.indices); !layers) {
+    return withContext("building implicit model", layers.error());
+  } else if (layers->inner_vertices > 0) {
+    b.inner = std::move(layers->inner);
   }
   b.resolvePrimitives();
   if (!b.settle()) return fail("building implicit model: vertex classes do not settle");

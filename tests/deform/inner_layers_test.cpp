@@ -265,5 +265,37 @@ TEST(InnerLayers, CarriedRigidlyUnderABallInTheFace) {
   }
 }
 
+// The builder fits no primitive to an inner layer: the avatar with eyes and a tongue gets the
+// very primitives of the avatar without them (fitted to them, the head's primitive shrank
+// inside the skin: r_in 7.07 cm against 7.70).
+TEST(InnerLayers, FitNoPrimitive) {
+  Result<std::vector<JointMap>> maps = loadJointMaps();
+  ASSERT_TRUE(maps.ok());
+  Result<PrimitiveMapSpec> spec = loadPrimitiveMap();
+  ASSERT_TRUE(spec.ok());
+  const auto build = [&](const AvatarModel& avatar) {
+    Result<const JointMap*> map = selectJointMap(*maps, avatar.skeleton);
+    EXPECT_TRUE(map.ok());
+    Result<ImplicitModel> model = buildImplicitModel(avatar, *spec, *map, {}, nullptr);
+    EXPECT_TRUE(model.ok()) << model.error().message;
+    return model.ok() ? std::move(*model) : ImplicitModel{};
+  };
+  Result<AvatarModel> plain = makeDefaultAvatar();
+  ASSERT_TRUE(plain.ok());
+  const ImplicitModel without = build(*plain);
+  const ImplicitModel with = build(innerAvatar().avatar);
+  ASSERT_EQ(with.primitives.items.size(), without.primitives.items.size());
+  ASSERT_FALSE(with.primitives.items.empty());
+  for (std::size_t k = 0; k < with.primitives.items.size(); ++k) {
+    const Primitive& a = with.primitives.items[k];
+    const Primitive& b = without.primitives.items[k];
+    EXPECT_EQ(a.name, b.name);
+    EXPECT_EQ(a.r_in, b.r_in) << a.name;
+    EXPECT_EQ(a.r_out, b.r_out) << a.name;
+    EXPECT_EQ(a.shape.a, b.shape.a) << a.name;
+    EXPECT_EQ(a.shape.b, b.shape.b) << a.name;
+  }
+}
+
 }  // namespace
 }  // namespace vistel
