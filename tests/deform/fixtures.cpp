@@ -238,4 +238,41 @@ float maxDisplacement(const Body& b) {
   return m;
 }
 
+SoftBallShare softBallAt(const RealAvatar& avatar, int v) {
+  constexpr float kRadius = 0.1f;
+  auto body = realBody(avatar);
+  body->pose();
+  const auto vi = static_cast<std::size_t>(v);
+  const glm::vec3 n = glm::normalize(body->rigid_nrm[vi]);
+  BallSpec spec;
+  spec.radius = kRadius;
+  spec.stiffness = 3.0e4f;
+  auto ball = ballBody(spec, body->rigid_pos[vi] + (kRadius - 0.02f) * n);
+  Scene scene;
+  scene.bodies = {body.get(), ball.get()};
+  scene.step(0.0);
+  const auto deepest = [](const Body& b, int partner) {
+    float m = 0.0f;
+    for (std::size_t x = 0; x < b.rigid_pos.size(); ++x) {
+      if (b.state.contact_body[x] != partner) continue;
+      m = std::max(m, glm::length(b.state.positions[x] - b.rigid_pos[x]));
+    }
+    return m;
+  };
+  SoftBallShare s;
+  s.body_move = deepest(*body, 1);
+  s.ball_move = deepest(*ball, 0);
+  const std::int16_t p = body->model.calibration.prims[vi][0];
+  const float k_body = body->model.primitives.items[static_cast<std::size_t>(p)].stiffness;
+  s.expected = spec.stiffness / (spec.stiffness + k_body);
+  for (const PairContact& c : scene.contacts) {
+    if (c.body_a == 0 && c.body_b == 1) {
+      s.area_body = c.area_a;
+      s.area_ball = c.area_b;
+    }
+  }
+  s.free_site = body->model.calibration.vertex_class[vi] == VertexClass::kFree;
+  return s;
+}
+
 }  // namespace vistel::test

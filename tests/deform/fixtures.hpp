@@ -88,4 +88,20 @@ void bendArm(Body& arm, float angle);
 // Largest |deformed - rigid| over a body's vertices.
 float maxDisplacement(const Body& b);
 
+// A soft ball (3e4 Pa/m, r 0.1 m) placed 2 cm into a real avatar's skin along the outward
+// normal at vertex v; one scene step. The body's share of the overlap (its deepest contact
+// vertex's move over both bodies' deepest moves) against the stiffness ratio
+// k_ball / (k_ball + k_body), and the two contact areas (Step 3).
+struct SoftBallShare {
+  float body_move = 0.0f, ball_move = 0.0f;
+  float expected = 0.0f;  // the body's share by the stiffness ratio
+  double area_body = 0.0, area_ball = 0.0;
+  bool free_site = false;  // v is a free vertex
+  float share() const {
+    const float total = body_move + ball_move;
+    return total > 0.0f ? body_move / total : 0.0f;
+  }
+};
+SoftBallShare softBallAt(const RealAvatar& avatar, int v);
+
 }  // namespace vistel::test

@@ -145,55 +145,9 @@ Approach measure(const Avatar& a, int stride) {
   return ap;
 }
 
-// A soft ball (3e4 Pa/m, r 0.1 m) placed 2 cm into the skin along the outward normal at a
-// site; one scene step. The body's share of the overlap (its deepest contact vertex's move
-// over both bodies' deepest moves) against the stiffness ratio k_ball / (k_ball + k_body),
-// and the two contact areas (Step 3).
-struct Share {
-  float body_move = 0.0f, ball_move = 0.0f;
-  float expected = 0.0f;  // the body's share by the stiffness ratio
-  double area_body = 0.0, area_ball = 0.0;
-  bool free_site = false;
-};
-
-Share softBallAt(const Avatar& a, int v) {
-  auto body = test::realBody(a);
-  body->pose();
-  const auto vi = static_cast<std::size_t>(v);
-  const glm::vec3 n = glm::normalize(body->rigid_nrm[vi]);
-  BallSpec spec;
-  spec.radius = kBallRadius;
-  spec.stiffness = 3.0e4f;
-  auto ball = test::ballBody(spec, body->rigid_pos[vi] + (kBallRadius - 0.02f) * n);
-  test::Scene scene;
-  scene.bodies = {body.get(), ball.get()};
-  scene.step(0.0);
-  Share s;
-  const auto deepest = [](const test::Body& b, int partner) {
-    float m = 0.0f;
-    for (std::size_t x = 0; x < b.rigid_pos.size(); ++x) {
-      if (b.state.contact_body[x] != partner) continue;
-      m = std::max(m, glm::length(b.state.positions[x] - b.rigid_pos[x]));
-    }
-    return m;
-  };
-  s.body_move = deepest(*body, 1);
-  s.ball_move = deepest(*ball, 0);
-  const std::int16_t p = body->model.calibration.prims[vi][0];
-  const float k_body = body->model.primitives.items[static_cast<std::size_t>(p)].stiffness;
-  s.expected = spec.stiffness / (spec.stiffness + k_body);
-  for (const PairContact& c : scene.contacts) {
-    if (c.body_a == 0 && c.body_b == 1) {
-      s.area_body = c.area_a;
-      s.area_ball = c.area_b;
-    }
-  }
-  s.free_site = body->model.calibration.vertex_class[vi] == VertexClass::kFree;
-  return s;
-}
-
-// Sites any humanoid has: the crown (highest vertex), the chest (the torso's front-most),
-// the back of the left hand (its highest), the left thigh's front-most vertex.
+// A soft ball's share of the overlap (test::softBallAt), printed at sites any humanoid has:
+// the crown (highest vertex), the chest (the torso's front-most), the back of the left hand
+// (its highest), the left thigh's front-most vertex.
 void softBallSites(const Avatar& a) {
   const SkinMesh& m = a.avatar.skin;
   const auto& cal = a.model.calibration;
@@ -216,14 +170,12 @@ void softBallSites(const Avatar& a) {
                                                {"thigh", owned("l_thigh", fronter)}};
   for (const auto& [name, v] : sites) {
     if (v < 0) continue;
-    const Share s = softBallAt(a, v);
-    const float total = s.body_move + s.ball_move;
+    const test::SoftBallShare s = test::softBallAt(a, v);
     std::printf(
         "%s soft ball on the %s (vertex %d, %s): body moves %.4f m, ball %.4f m: body share "
         "%.2f (stiffness ratio %.2f); contact areas body %.1f cm^2, ball %.1f cm^2\n",
         a.avatar.name.c_str(), name, v, s.free_site ? "free" : "modelled", s.body_move, s.ball_move,
-        total > 0.0f ? s.body_move / total : 0.0f, s.expected, s.area_body * 1e4,
-        s.area_ball * 1e4);
+        s.share(), s.expected, s.area_body * 1e4, s.area_ball * 1e4);
   }
 }
 

@@ -260,56 +260,6 @@ TEST(FreeVertices, MakehumanBallMeetsTheAdoptedSkin) {
   ballMeetsAdoptedSkin("makehuman", 37, 50);
 }
 
-// A soft ball (3e4 Pa/m, r 0.1 m) placed 2 cm into the skin along the outward normal at a
-// vertex; one scene step. The body's share of the overlap (its deepest contact vertex's move
-// over both bodies' deepest moves) against the stiffness ratio, and both contact areas.
-struct Share {
-  float body_move = 0.0f, ball_move = 0.0f;
-  float expected = 0.0f;
-  double area_body = 0.0, area_ball = 0.0;
-  bool free_site = false;
-  float share() const {
-    const float total = body_move + ball_move;
-    return total > 0.0f ? body_move / total : 0.0f;
-  }
-};
-
-Share softBallAt(const Avatar& a, int v) {
-  auto body = test::realBody(a);
-  body->pose();
-  const auto vi = static_cast<std::size_t>(v);
-  const glm::vec3 n = glm::normalize(body->rigid_nrm[vi]);
-  BallSpec spec;
-  spec.radius = kBallRadius;
-  spec.stiffness = 3.0e4f;
-  auto ball = test::ballBody(spec, body->rigid_pos[vi] + (kBallRadius - 0.02f) * n);
-  test::Scene scene;
-  scene.bodies = {body.get(), ball.get()};
-  scene.step(0.0);
-  Share s;
-  const auto deepest = [](const test::Body& b, int partner) {
-    float m = 0.0f;
-    for (std::size_t x = 0; x < b.rigid_pos.size(); ++x) {
-      if (b.state.contact_body[x] != partner) continue;
-      m = std::max(m, glm::length(b.state.positions[x] - b.rigid_pos[x]));
-    }
-    return m;
-  };
-  s.body_move = deepest(*body, 1);
-  s.ball_move = deepest(*ball, 0);
-  const std::int16_t p = body->model.calibration.prims[vi][0];
-  const float k_body = body->model.primitives.items[static_cast<std::size_t>(p)].stiffness;
-  s.expected = spec.stiffness / (spec.stiffness + k_body);
-  for (const PairContact& c : scene.contacts) {
-    if (c.body_a == 0 && c.body_b == 1) {
-      s.area_body = c.area_a;
-      s.area_ball = c.area_b;
-    }
-  }
-  s.free_site = body->model.calibration.vertex_class[vi] == VertexClass::kFree;
-  return s;
-}
-
 // Sites: the left fingertip farthest from the body (+X), the back of the left hand (the
 // highest vertex of the hand's primitive), the upper chest (the front-most vertex whose
 // heaviest joint is the chest's), the crown (the highest vertex).
@@ -356,7 +306,7 @@ void softBallShares(const std::string& which, float soft_tolerance) {
   for (const auto& [name, v] : softBallSites(after->avatar)) {
     ASSERT_GE(v, 0) << name;
     for (const Avatar* a : {before, &after->avatar}) {
-      const Share s = softBallAt(*a, v);
+      const test::SoftBallShare s = test::softBallAt(*a, v);
       std::printf(
           "%s %s: soft ball on the %s (vertex %d, %s): body moves %.4f m, ball %.4f m: body "
           "share %.3f (stiffness ratio %.3f); contact areas body %.1f cm^2, ball %.1f cm^2\n",
