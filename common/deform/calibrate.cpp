@@ -5,11 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <numbers>
-#include <string>
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/Sparse>
 
@@ -39,64 +36,13 @@ float surfaceSlope(const PrimitiveSet& set, const PosedPrimitive& p, const Primi
   return slope > 0.0f && std::isfinite(slope) ? slope : 50.0f;
 }
 
-// A limb capsule fitted to points: on their principal segment (through the centroid along
-// the largest axis, its ends pulled in by the mean radial distance), or a sphere at the
-// centroid for a compact cloud; r_in their mean skeleton distance, r_out at least `reach`
-// times the largest and r_in / max_ratio.
-Shape fitAdoptedShape(std::span<const glm::vec3> pts, float reach, float max_ratio, float& r_in,
-                      float& r_out) {
-  glm::dvec3 sum(0.0);
-  for (const glm::vec3& p : pts) sum += glm::dvec3(p);
-  const glm::vec3 c = glm::vec3(sum / static_cast<double>(std::max<std::size_t>(pts.size(), 1)));
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const glm::vec3& p : pts) {
-    const Eigen::Vector3d d(p.x - c.x, p.y - c.y, p.z - c.z);
-    cov += d * d.transpose();
-  }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
-  const Eigen::Vector3d e3 = es.eigenvectors().col(2);  // eigenvalues ascend
-  glm::vec3 e(static_cast<float>(e3.x()), static_cast<float>(e3.y()), static_cast<float>(e3.z()));
-  e = glm::length(e) > 0.0f ? glm::normalize(e) : glm::vec3(1.0f, 0.0f, 0.0f);
-  float t0 = INFINITY, t1 = -INFINITY;
-  double radial = 0.0;
-  for (const glm::vec3& p : pts) {
-    const float t = glm::dot(p - c, e);
-    t0 = std::min(t0, t);
-    t1 = std::max(t1, t);
-    radial += glm::length((p - c) - t * e);
-  }
-  const auto r =
-      static_cast<float>(radial / static_cast<double>(std::max<std::size_t>(pts.size(), 1)));
-  Shape s;
-  if (t1 - t0 > 2.0f * r) {
-    s.kind = ShapeKind::kSphylinder;
-    s.a = c + (t0 + r) * e;
-    s.b = c + (t1 - r) * e;
-  } else {
-    s.kind = ShapeKind::kSphere;
-    s.a = s.b = c;
-  }
-  prepareShape(s);
-  double dsum = 0.0;
-  float biggest = 0.0f;
-  for (const glm::vec3& p : pts) {
-    const float d = skeletonDistance(s, p);
-    dsum += d;
-    biggest = std::max(biggest, d);
-  }
-  r_in = std::max(
-      static_cast<float>(dsum / static_cast<double>(std::max<std::size_t>(pts.size(), 1))), 1e-3f);
-  r_out = std::max(reach * biggest, r_in / max_ratio);
-  return s;
-}
-
 }  // namespace
 
 namespace {
 
 // fitSkinWeights, where a primitive also fits the vertices that name it in also_fits (nvert,
 // or empty): adopted vertices it fitted before they got a primitive of their own (see
-// adoptFreeVertices), so its skin stays where it was.
+// offline/build/free_vertex_adoption.hpp), so its skin stays where it was.
 void fitSkinWeightsWith(ImplicitModel& model, std::span<const glm::vec3> pos,
                         std::span<const std::uint8_t> demoted,
                         std::span<const std::int16_t> also_fits, int samples) {
@@ -411,152 +357,9 @@ Result<CalibrationReport> calibrateWith(ImplicitModel& model, std::span<const gl
 
 Result<CalibrationReport> calibrateModel(ImplicitModel& model, std::span<const glm::vec3> pos,
                                          std::span<const glm::vec3> nrm,
-                                         const FieldCalibrationOptions& opt) {
-  return calibrateWith(model, pos, nrm, opt, {});
-}
-
-Result<AdoptionReport> adoptFreeVertices(ImplicitModel& model, const Skeleton& skeleton,
-                                         const SkinMesh& skin, const AdoptionOptions& opt,
-                                         const FieldCalibrationOptions& calibration) {
-  Calibration& c = model.calibration;
-  PrimitiveSet& set = model.primitives;
-  const std::size_t nv = skin.positions.size();
-  const auto k = static_cast<std::size_t>(skin.influences);
-  if (c.vertex_class.size() != nv || c.prims.size() != nv || skin.joints.size() != nv * k ||
-      skin.weights.size() != nv * k || skin.normals.size() != nv) {
-    return fail("adopting free vertices: skin of {} vertices, calibration of {}", nv,
-                c.vertex_class.size());
-  }
-  const std::size_t np0 = set.items.size();
-  if (model.graph.primitive_count != static_cast<int>(np0)) {
-    return fail("adopting free vertices: graph not finalized for {} primitives", np0);
-  }
-  const int nj = skeleton.jointCount();
-  // Per free vertex: the joint carrying most of its skin weight.
-  std::vector<int> heaviest(nv, -1);
-  for (std::size_t v = 0; v < nv; ++v) {
-    // Inner layers (eyes, teeth) stay carried by their skinning alone.
-    if (c.vertex_class[v] != VertexClass::kFree || innerVertex(c, v)) continue;
-    float best = 0.0f;
-    for (std::size_t s = 0; s < k; ++s) {
-      const float w = skin.weights[v * k + s];
-      const int j = skin.joints[v * k + s];
-      if (w > best && j < nj) {
-        best = w;
-        heaviest[v] = j;
-      }
-    }
-  }
-  AdoptionReport report;
-  const float iso = set.iso;
-  // By heaviest joint: a primitive of their own. A vertex whose former owner is carried by
-  // that same joint (a crown vertex beyond the head's support, demoted at calibration) stays
-  // in the owner's fit as well, so the owner's skin does not move.
-  std::map<int, std::vector<std::uint32_t>> groups;
-  for (std::size_t v = 0; v < nv; ++v) {
-    if (heaviest[v] >= 0) groups[heaviest[v]].push_back(static_cast<std::uint32_t>(v));
-  }
-  std::vector<std::int16_t> also_fits(nv, kNoPrimitive);
-  std::vector<int> owner_of;  // per new primitive: the primitive its vertices had as owner
-  std::vector<glm::vec3> pts;
-  for (const auto& [joint, members] : groups) {
-    if (static_cast<int>(members.size()) < std::max(opt.min_vertices, 4)) continue;
-    if (set.items.size() >= static_cast<std::size_t>(kMaxPrimitives)) {
-      return fail("adopting free vertices: more than {} primitives", kMaxPrimitives);
-    }
-    // The former owner: the commonest p0 among them.
-    std::map<int, int> votes;
-    for (const std::uint32_t v : members) {
-      if (c.prims[v][0] >= 0) ++votes[c.prims[v][0]];
-    }
-    int owner = -1, most = 0;
-    for (const auto& [p, count] : votes) {
-      if (count > most) {
-        most = count;
-        owner = p;
-      }
-    }
-    pts.clear();
-    for (const std::uint32_t v : members) pts.push_back(skin.positions[v]);
-    Primitive q;
-    // "<owner>/<joint>": the body part it belongs to, then its joint (see primitivePart).
-    std::string name = skeleton.names[static_cast<std::size_t>(joint)];
-    if (owner >= 0) name = set.items[static_cast<std::size_t>(owner)].name + "/" + name;
-    while (std::any_of(set.items.begin(), set.items.end(),
-                       [&name](const Primitive& p) { return p.name == name; })) {
-      name += "+";
-    }
-    q.name = name;
-    q.role = PrimitiveRole::kLimb;
-    q.bone = joint;
-    q.shape = fitAdoptedShape(pts, opt.reach, opt.max_surface_ratio, q.r_in, q.r_out);
-    if (owner >= 0) {
-      const Primitive& o = set.items[static_cast<std::size_t>(owner)];
-      q.density = o.density;
-      q.stiffness = o.stiffness;
-      q.elasticity = o.elasticity;
-      q.time_constant = o.time_constant;
-      q.collides = o.collides;
-    }
-    q.weight = shapeWeight(q.density, iso, q.r_in, q.r_out);
-    const auto qi = static_cast<std::int16_t>(set.items.size());
-    set.items.push_back(std::move(q));
-    owner_of.push_back(owner);
-    for (const std::uint32_t v : members) {
-      const std::int16_t was = c.prims[v][0];
-      if (was >= 0 && set.items[static_cast<std::size_t>(was)].bone == joint) also_fits[v] = was;
-      c.vertex_class[v] = VertexClass::kLimb;
-      c.prims[v] = {qi, kNoPrimitive, kNoPrimitive, kNoPrimitive};
-    }
-    ++report.primitives;
-    report.adopted += static_cast<int>(members.size());
-  }
-  if (report.primitives == 0) {  // nothing adopted: the model stays as it was
-    report.calibration.limb = report.calibration.joint = report.calibration.free = 0;
-    for (const VertexClass cls : c.vertex_class) {
-      if (cls == VertexClass::kLimb) ++report.calibration.limb;
-      if (cls == VertexClass::kJoint) ++report.calibration.joint;
-      if (cls == VertexClass::kFree) ++report.calibration.free;
-    }
-    return report;
-  }
-  // Collisions: a new primitive inherits its former owner's, except with the owner and the
-  // other primitives made from the owner's vertices.
-  CombinationGraph& g = model.graph;
-  const std::size_t np = set.items.size();
-  for (std::size_t a = np0; a < np; ++a) {
-    const int oa = owner_of[a - np0];
-    if (oa < 0 || !set.items[a].collides) continue;
-    for (std::size_t i = 0; i < np; ++i) {
-      if (i == a || !set.items[i].collides) continue;
-      const int oi = i < np0 ? static_cast<int>(i) : owner_of[i - np0];
-      if (oi < 0 || oi == oa || (i >= np0 && i < a)) continue;  // new pairs once
-      // Nor with the owner's neighbours across a joint (the upper arm for the chest, the
-      // forearm for a finger): the owner meets those through the joint's blend.
-      if (!g.collides(oa, oi) || g.neighbours(oa, oi)) continue;
-      g.collide_pairs.push_back(
-          {static_cast<std::uint16_t>(std::min(a, i)), static_cast<std::uint16_t>(std::max(a, i))});
-    }
-  }
-  finalizeGraph(g, static_cast<int>(np));
-  // Rigid flags and the own field's share for the vertices that got a field.
-  if (c.rigid.size() != nv) c.rigid.assign(nv, 0);
-  if (c.own_weight.size() != nv) c.own_weight.assign(nv, 1.0f);
-  for (std::size_t v = 0; v < nv; ++v) {
-    if (heaviest[v] < 0 || c.vertex_class[v] == VertexClass::kFree) continue;
-    const int bone = set.items[static_cast<std::size_t>(c.prims[v][0])].bone;
-    float own = 0.0f;
-    for (std::size_t s = 0; s < k; ++s) {
-      if (skin.joints[v * k + s] == bone) own += skin.weights[v * k + s];
-    }
-    c.rigid[v] = own >= 1.0f - 1e-6f ? 1 : 0;
-    c.own_weight[v] = std::clamp(own, 0.0f, 1.0f);
-  }
-  Result<CalibrationReport> cal =
-      calibrateWith(model, skin.positions, skin.normals, calibration, also_fits);
-  if (!cal) return withContext("adopting free vertices", cal.error());
-  report.calibration = *cal;
-  return report;
+                                         const FieldCalibrationOptions& opt,
+                                         std::span<const std::int16_t> also_fits) {
+  return calibrateWith(model, pos, nrm, opt, also_fits);
 }
 
 void computeRelaxationWeights(std::span<const glm::vec3> pos, std::span<const glm::vec3> nrm,

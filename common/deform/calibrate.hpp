@@ -12,8 +12,6 @@
 
 #include <glm/glm.hpp>
 
-#include "common/anim/skeleton.hpp"
-#include "common/anim/skin_mesh.hpp"
 #include "common/base/result.hpp"
 #include "common/deform/implicit_model.hpp"
 
@@ -40,10 +38,15 @@ struct CalibrationReport {
 // finalized. rest_positions and rest_normals: the prototype skin (nvert), bind-pose model
 // space. Keeps the ring arrays and the rigid flags if already sized (clearing the flag of
 // demoted vertices), else leaves them empty per vertex / not rigid.
+// also_fits (nvert, or empty): a primitive per vertex that fits its skin weights to the
+// vertex as well as to those it defines (see fitSkinWeights; -1: none): the vertices given a
+// primitive of their own by adoptFreeVertices (offline/build/free_vertex_adoption.hpp),
+// which their former owner fitted, so that its skin stays where it was.
 Result<CalibrationReport> calibrateModel(ImplicitModel& model,
                                          std::span<const glm::vec3> rest_positions,
                                          std::span<const glm::vec3> rest_normals,
-                                         const FieldCalibrationOptions& options = {});
+                                         const FieldCalibrationOptions& options = {},
+                                         std::span<const std::int16_t> also_fits = {});
 
 // Fits every primitive's skin weight grid (Primitive::skin_weight) so that its skin
 // w_i F_i = T passes through, or just outside, the vertices it defines (limb and joint
@@ -60,50 +63,6 @@ Result<CalibrationReport> calibrateModel(ImplicitModel& model,
 // sparse solves of samples^3 unknowns per primitive (offline).
 void fitSkinWeights(ImplicitModel& model, std::span<const glm::vec3> rest_positions,
                     std::span<const std::uint8_t> demoted = {}, int samples = 16);
-
-// Free vertices given a field of their own (issue 25 item 4): fingers, toes, the upper
-// chest, the collarbones, a crown beyond the head's support. Each free vertex goes with the
-// joint that carries most of its skin weight, and the joint's free vertices (at least
-// min_vertices of them) become the limb vertices of a primitive of their own carried by that
-// joint (a phalanx, a toe, the upper chest, a cap over the crown): a capsule on their
-// principal segment (a sphere for a compact group), r_in their mean skeleton distance, r_out
-// past the farthest of them, material from the primitive that owned them for collisions.
-// A new primitive collides with what its former owner collides with, except the owner, the
-// owner's neighbours across a joint primitive (the owner meets those through the joint's
-// blend) and the other primitives made from the owner's vertices (a finger does not collide
-// with its hand, its forearm or the other fingers). A former owner carried by the same joint
-// keeps fitting its skin weights to the vertices it fitted before (so its skin does not
-// move). Skeletons without finger or toe bones get no such primitives (their vertices are
-// then on the hand's and foot's bones, and not free). Inner layers (inner_layers.hpp) are
-// left alone. Not yet run by the builder (offline/build): with it, MakeHuman's hand pushed
-// through the hips leaves 945 vertices unsolved against 321 without, and the primitive
-// count, part grouping and deformation bounds the tests hold change; see issue 25.
-struct AdoptionOptions {
-  int min_vertices = 4;            // free vertices a joint needs for a primitive of its own
-  float max_surface_ratio = 0.7f;  // r_in / r_out at most this
-  float reach = 1.25f;             // r_out at least this times the farthest vertex's distance
-};
-
-struct AdoptionReport {
-  int primitives = 0;             // primitives added
-  int adopted = 0;                // free vertices given a new primitive
-  CalibrationReport calibration;  // the model's calibration afterwards
-};
-
-// Adopts the free vertices of a calibrated model (calibrateModel run, the graph finalized)
-// of `skin` on `skeleton` (the skin the model was calibrated on: same vertex count, joints in
-// range), then recalibrates it (as calibrateModel with `calibration`) and keeps the ring
-// arrays. Nothing to adopt: the model is left as it was (the report's calibration then
-// counts the classes only), so a second call changes nothing.
-// Primitives are named "<former owner>/<joint>" (e.g. "l_hand/index_01_l", "torso/spine_03";
-// the joint's name alone when the vertices had no owner; suffixed with '+' where taken), so
-// that primitivePart groups them with their body part. Calibration::rigid and
-// own_weight are set for the adopted vertices: the share of their skin weight on their
-// primitive's bone. Fails on mismatched sizes or when the set would exceed kMaxPrimitives.
-// Cost: offline; one more calibration.
-Result<AdoptionReport> adoptFreeVertices(ImplicitModel& model, const Skeleton& skeleton,
-                                         const SkinMesh& skin, const AdoptionOptions& options = {},
-                                         const FieldCalibrationOptions& calibration = {});
 
 // Tangential relaxation weights (Vaillant et al. 2013): for each vertex, its one-ring
 // and mean-value coordinates of the vertex in the ring projected on its tangent plane

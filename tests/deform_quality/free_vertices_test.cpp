@@ -4,7 +4,7 @@
 // the calibrated rest (nothing moves), a rigid ball meeting the adopted skin (at most 2 mm
 // into the mesh, as skin_fit_test for the rest of the body), and a soft ball on a fingertip,
 // the back of the hand and the upper chest sharing the overlap with the body. The builder
-// does not run it yet (calibrate.hpp says why): these tests adopt on a built model.
+// does not run it yet (free_vertex_adoption.hpp says why): these tests adopt on a built model.
 #include <algorithm>
 #include <cstdio>
 #include <map>
@@ -13,10 +13,10 @@
 
 #include <gtest/gtest.h>
 
-#include "common/deform/calibrate.hpp"
 #include "common/deform/posed_primitives.hpp"
 #include "common/deform/prop.hpp"
 #include "common/deform/vertex_field.hpp"
+#include "offline/build/free_vertex_adoption.hpp"
 #include "tests/deform/fixtures.hpp"
 #include "tests/support/test_support.hpp"
 
