@@ -9,6 +9,8 @@
 #include <memory>
 #include <numeric>
 
+#include "common/base/disjoint_sets.hpp"
+
 namespace vistel {
 namespace {
 
@@ -22,26 +24,6 @@ constexpr int kInsideVotes = 4;
 
 // Grid cells per side of a container's 2-D grid: about two triangles per cell, at most this.
 constexpr int kMaxGridSide = 128;
-
-struct UnionFind {
-  std::vector<std::uint32_t> parent;
-
-  explicit UnionFind(std::size_t n) : parent(n) {
-    std::iota(parent.begin(), parent.end(), std::uint32_t{0});
-  }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent[x] != x) {
-      parent[x] = parent[parent[x]];
-      x = parent[x];
-    }
-    return x;
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
 
 // The side of p from the directed 2-D edge a -> b: +1 left, -1 right, never 0. The sign is
 // computed for the edge's canonical direction (lexicographically smaller end first) and
@@ -192,10 +174,10 @@ Result<InnerLayers> findInnerLayers(std::span<const glm::vec3> pos,
   }
 
   // Components: triangles join their vertices, equal positions are one vertex.
-  UnionFind uf(nv);
+  DisjointSets uf(nv);
   for (std::size_t f = 0; f < idx.size(); f += 3) {
-    uf.unite(idx[f], idx[f + 1]);
-    uf.unite(idx[f], idx[f + 2]);
+    uf.join(idx[f], idx[f + 1]);
+    uf.join(idx[f], idx[f + 2]);
   }
   std::vector<std::uint32_t> by_position(nv);
   std::iota(by_position.begin(), by_position.end(), std::uint32_t{0});
@@ -208,8 +190,7 @@ Result<InnerLayers> findInnerLayers(std::span<const glm::vec3> pos,
   };
   std::sort(by_position.begin(), by_position.end(), less);
   for (std::size_t i = 1; i < nv; ++i) {
-    if (pos[by_position[i]] == pos[by_position[i - 1]])
-      uf.unite(by_position[i], by_position[i - 1]);
+    if (pos[by_position[i]] == pos[by_position[i - 1]]) uf.join(by_position[i], by_position[i - 1]);
   }
 
   // Number the roots that hold a triangle; count vertices and triangles.

@@ -3,27 +3,10 @@
 #include <numeric>
 #include <unordered_map>
 
+#include "common/base/disjoint_sets.hpp"
+
 namespace vistel {
 namespace {
-
-// Union-find over small integer ids.
-class DisjointSets {
- public:
-  explicit DisjointSets(std::size_t n) : parent_(n) {
-    std::iota(parent_.begin(), parent_.end(), std::uint32_t{0});
-  }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent_[x] != x) {
-      parent_[x] = parent_[parent_[x]];
-      x = parent_[x];
-    }
-    return x;
-  }
-  void join(std::uint32_t a, std::uint32_t b) { parent_[find(a)] = find(b); }
-
- private:
-  std::vector<std::uint32_t> parent_;
-};
 
 struct EdgeUse {
   int forward = 0;   // uses as (smaller, larger)

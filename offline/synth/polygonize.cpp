@@ -10,6 +10,8 @@
 #include <cmath>
 #include <numeric>
 
+#include "common/base/disjoint_sets.hpp"
+
 namespace vistel::synth {
 namespace {
 
@@ -502,21 +504,10 @@ class Polygonizer {
 
   // Keeps the connected component with the most triangles.
   TriangleMesh keepLargestComponent() {
-    std::vector<std::uint32_t> parent(positions_.size());
-    std::iota(parent.begin(), parent.end(), 0u);
-    const auto find = [&](std::uint32_t x) {
-      while (parent[x] != x) {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-      }
-      return x;
-    };
+    DisjointSets pieces(positions_.size());
+    const auto find = [&pieces](std::uint32_t x) { return pieces.find(x); };
     for (std::size_t t = 0; t < indices_.size(); t += 3) {
-      for (int k = 1; k < 3; ++k) {
-        const std::uint32_t a = find(indices_[t]);
-        const std::uint32_t b = find(indices_[t + static_cast<std::size_t>(k)]);
-        if (a != b) parent[std::max(a, b)] = std::min(a, b);
-      }
+      for (std::size_t k = 1; k < 3; ++k) pieces.join(indices_[t], indices_[t + k]);
     }
     std::vector<std::uint32_t> triangles_per_root(positions_.size(), 0);
     for (std::size_t t = 0; t < indices_.size(); t += 3) ++triangles_per_root[find(indices_[t])];

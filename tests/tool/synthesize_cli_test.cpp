@@ -85,31 +85,24 @@ TEST(SynthesizeCli, AMissingPartFileAndAnUnknownBoneAreNamed) {
   Result<std::string> text = readFileText(manifest);
   ASSERT_TRUE(text.ok());
 
-  // A part file that is not there.
-  std::string missing = *text;
-  const std::string file = "file = \"l_hand.obj\"";
-  const auto at = missing.find(file);
-  ASSERT_NE(at, std::string::npos) << missing;
-  missing.replace(at, file.size(), "file = \"l_hand_lost.obj\"");
-  ASSERT_TRUE(writeFileText(dir + "/parts/MISSING.toml", missing).ok());
-  const test::ToolRun lost =
-      test::runTool("synthesize " + dir + "/parts/MISSING.toml -o " + dir + "/out.glb", dir);
-  EXPECT_NE(lost.exit_code, 0);
-  EXPECT_NE(lost.err.find("MISSING.toml"), std::string::npos) << lost.err;
-  EXPECT_NE(lost.err.find("l_hand_lost.obj"), std::string::npos) << lost.err;
-
-  // A bone the skeleton does not have.
-  std::string unknown = *text;
-  const std::string bone = "bone = \"l_hand\"";
-  const auto b = unknown.find(bone);
-  ASSERT_NE(b, std::string::npos) << unknown;
-  unknown.replace(b, bone.size(), "bone = \"l_tentacle\"");
-  ASSERT_TRUE(writeFileText(dir + "/parts/UNKNOWN.toml", unknown).ok());
-  const test::ToolRun bad =
-      test::runTool("synthesize " + dir + "/parts/UNKNOWN.toml -o " + dir + "/out.glb", dir);
-  EXPECT_NE(bad.exit_code, 0);
-  EXPECT_NE(bad.err.find("UNKNOWN.toml"), std::string::npos) << bad.err;
-  EXPECT_NE(bad.err.find("l_tentacle"), std::string::npos) << bad.err;
+  // The manifest with `from` replaced by `to`, written as `name`, is refused with the
+  // manifest's name and `bad` (the replaced value) in the error.
+  const auto refused = [&](const std::string& name, const std::string& from, const std::string& to,
+                           const std::string& bad) {
+    std::string edited = *text;
+    const auto at = edited.find(from);
+    ASSERT_NE(at, std::string::npos) << edited;
+    edited.replace(at, from.size(), to);
+    ASSERT_TRUE(writeFileText(dir + "/parts/" + name, edited).ok());
+    const test::ToolRun run =
+        test::runTool("synthesize " + dir + "/parts/" + name + " -o " + dir + "/out.glb", dir);
+    EXPECT_NE(run.exit_code, 0);
+    EXPECT_NE(run.err.find(name), std::string::npos) << run.err;
+    EXPECT_NE(run.err.find(bad), std::string::npos) << run.err;
+  };
+  // A part file that is not there; a bone the skeleton does not have.
+  refused("MISSING.toml", "file = \"l_hand.obj\"", "file = \"l_hand_lost.obj\"", "l_hand_lost.obj");
+  refused("UNKNOWN.toml", "bone = \"l_hand\"", "bone = \"l_tentacle\"", "l_tentacle");
 }
 
 }  // namespace
