@@ -10,6 +10,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "common/deform/posed_primitives.hpp"
+#include "common/deform/vertex_field.hpp"
 #include "offline/gltf/gltf_import.hpp"
 #include "offline/synth/default_avatar.hpp"
 #include "tests/support/test_support.hpp"
@@ -236,6 +237,60 @@ float maxDisplacement(const Body& b) {
     m = std::max(m, glm::length(b.state.positions[v] - b.rigid_pos[v]));
   }
   return m;
+}
+
+void expectRestsExactly(Body& b, const std::string& name) {
+  PosedPrimitives rest;
+  std::vector<glm::mat4> identity(static_cast<std::size_t>(b.skeleton.jointCount()),
+                                  glm::mat4(1.0f));
+  posePrimitives(b.model.primitives, identity, rest);
+  for (int v = 0; v < b.mesh.vertexCount(); ++v) {
+    const auto vi = static_cast<std::size_t>(v);
+    if (b.model.calibration.vertex_class[vi] == VertexClass::kFree) continue;
+    const float f =
+        b.model.calibration.w[vi] * vertexDensity(b.model, rest, v, b.mesh.positions[vi]);
+    ASSERT_NEAR(f, b.model.primitives.iso, 1e-5f) << name << " vertex " << v;
+  }
+  Scene scene;
+  scene.bodies = {&b};
+  scene.step(0.0);
+  EXPECT_LT(maxDisplacement(b), 1e-5f) << name;
+  EXPECT_EQ(b.state.counters.unsolved_vertices, 0) << name;
+  EXPECT_EQ(b.state.counters.contact_vertices, 0) << name;
+}
+
+std::optional<BallTouch> rigidBallTouch(const Body& b, int v, float radius) {
+  const float r = radius;
+  const BodyView view{nullptr, &b.posed};
+  BallStepOptions still;
+  still.gravity = glm::vec3(0.0f);
+  still.floor = false;
+  const auto touches = [&](const glm::vec3& c) {
+    BallState ball;
+    ball.position = c;
+    ball.radius = r;
+    return stepBall(ball, {&view, 1}, 1e-6f, still).contact_count > 0;
+  };
+  const auto deepest = [&](const glm::vec3& c) {
+    BallTouch out{-INFINITY, -1};
+    for (std::size_t x = 0; x < b.rigid_pos.size(); ++x) {
+      const float d = r - glm::length(b.rigid_pos[x] - c);
+      if (d > out.depth) out = {d, static_cast<int>(x)};
+    }
+    return out;
+  };
+  const auto vi = static_cast<std::size_t>(v);
+  const glm::vec3 n = glm::normalize(b.rigid_nrm[vi]);
+  const glm::vec3 x0 = b.rigid_pos[vi];
+  if (deepest(x0 + (r + 0.06f) * n).depth > 0.0f) return std::nullopt;
+  float t = 0.06f;
+  while (t > -0.06f && !touches(x0 + (r + t) * n)) t -= 0.001f;
+  float apart = t + 0.001f;
+  for (int i = 0; i < 7; ++i) {
+    const float mid = 0.5f * (apart + t);
+    (touches(x0 + (r + mid) * n) ? t : apart) = mid;
+  }
+  return deepest(x0 + (r + t) * n);
 }
 
 SoftBallShare softBallAt(const RealAvatar& avatar, int v) {

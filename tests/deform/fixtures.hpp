@@ -3,6 +3,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -87,6 +88,22 @@ void bendArm(Body& arm, float angle);
 
 // Largest |deformed - rigid| over a body's vertices.
 float maxDisplacement(const Body& b);
+
+// A calibrated body at rest: every limb and joint vertex lies on its field's surface
+// (w_v D_v = iso within 1e-5), and one scene step of the body alone moves no vertex (1e-5 m),
+// leaves none unsolved and finds no contact. Failures name `name` and the vertex.
+void expectRestsExactly(Body& body, const std::string& name);
+
+// A rigid ball of `radius` brought in along vertex v's rigid normal (from 6 cm out in 1 mm
+// steps, then by halves to 0.01 mm) until it first touches the body's posed primitives
+// (stepBall, as the server decides contact): the mesh's deepest vertex inside the ball then,
+// and how deep (m; negative: a gap). Nothing where v is in a concave place the ball cannot
+// reach along the normal (a vertex already inside it 6 cm out). The body must be posed.
+struct BallTouch {
+  float depth = 0.0f;
+  int vertex = -1;
+};
+std::optional<BallTouch> rigidBallTouch(const Body& body, int v, float radius);
 
 // A soft ball (3e4 Pa/m, r 0.1 m) placed 2 cm into a real avatar's skin along the outward
 // normal at vertex v; one scene step. The body's share of the overlap (its deepest contact

@@ -35,26 +35,8 @@ void restChecks(const Avatar& a) {
   auto b = bodyOf(a);
   EXPECT_EQ(report.primitives.size(), 30u) << "the default map's 30 primitives";
   for (const std::string& w : report.warnings) ADD_FAILURE() << w;
-  // Calibration: every limb and joint vertex on its surface at rest.
-  PosedPrimitives rest;
-  std::vector<glm::mat4> identity(static_cast<std::size_t>(b->skeleton.jointCount()),
-                                  glm::mat4(1.0f));
-  posePrimitives(b->model.primitives, identity, rest);
-  for (int v = 0; v < b->mesh.vertexCount(); ++v) {
-    if (b->model.calibration.vertex_class[static_cast<std::size_t>(v)] == VertexClass::kFree)
-      continue;
-    const float f =
-        b->model.calibration.w[static_cast<std::size_t>(v)] *
-        vertexDensity(b->model, rest, v, b->mesh.positions[static_cast<std::size_t>(v)]);
-    ASSERT_NEAR(f, b->model.primitives.iso, 1e-5f) << a.avatar.name << " vertex " << v;
-  }
-  // Rest posture, nothing touching: nothing moves.
-  test::Scene scene;
-  scene.bodies = {b.get()};
-  scene.step(0.0);
-  EXPECT_LT(test::maxDisplacement(*b), 1e-5f);
-  EXPECT_EQ(b->state.counters.unsolved_vertices, 0);
-  EXPECT_EQ(b->state.counters.contact_vertices, 0);
+  // Calibration: every limb and joint vertex on its surface at rest; nothing moves.
+  test::expectRestsExactly(*b, a.avatar.name);
 }
 
 TEST(RealAvatars, DefaultAvatarRestsExactly) {

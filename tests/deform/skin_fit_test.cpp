@@ -55,51 +55,16 @@ void note(Worst& w, float depth, int v) {
 
 Approach approachBall(const test::Body& b, int stride) {
   Approach out;
-  const float r = kBallRadius;
-  const BodyView view{nullptr, &b.posed};
-  BallStepOptions still;
-  still.gravity = glm::vec3(0.0f);
-  still.floor = false;
-  const auto touches = [&](const glm::vec3& c) {
-    BallState ball;
-    ball.position = c;
-    ball.radius = r;
-    return stepBall(ball, {&view, 1}, 1e-6f, still).contact_count > 0;
-  };
-  // The mesh's deepest vertex inside a ball at c, and how deep.
-  const auto deepest = [&](const glm::vec3& c, int& at) {
-    float depth = -INFINITY;
-    for (std::size_t x = 0; x < b.rigid_pos.size(); ++x) {
-      const float d = r - glm::length(b.rigid_pos[x] - c);
-      if (d > depth) {
-        depth = d;
-        at = static_cast<int>(x);
-      }
-    }
-    return depth;
-  };
   for (int v = 0; v < b.mesh.vertexCount(); v += stride) {
-    const auto vi = static_cast<std::size_t>(v);
-    const glm::vec3 n = glm::normalize(b.rigid_nrm[vi]);
-    const glm::vec3 x0 = b.rigid_pos[vi];
-    int at = -1;
-    if (deepest(x0 + (r + 0.06f) * n, at) > 0.0f) {
+    const std::optional<test::BallTouch> touch = test::rigidBallTouch(b, v, kBallRadius);
+    if (!touch) {
       ++out.skipped;
       continue;
     }
-    // From 6 cm out in 1 mm steps until the ball touches, then by halves to 0.01 mm.
-    float t = 0.06f;
-    while (t > -0.06f && !touches(x0 + (r + t) * n)) t -= 0.001f;
-    float apart = t + 0.001f;
-    for (int i = 0; i < 7; ++i) {
-      const float mid = 0.5f * (apart + t);
-      (touches(x0 + (r + mid) * n) ? t : apart) = mid;
-    }
-    const float depth = deepest(x0 + (r + t) * n, at);
-    out.gap = std::max(out.gap, -depth);
-    const bool free =
-        b.model.calibration.vertex_class[static_cast<std::size_t>(at)] == VertexClass::kFree;
-    note(free ? out.free : out.modelled, depth, v);
+    out.gap = std::max(out.gap, -touch->depth);
+    const bool free = b.model.calibration.vertex_class[static_cast<std::size_t>(touch->vertex)] ==
+                      VertexClass::kFree;
+    note(free ? out.free : out.modelled, touch->depth, v);
   }
   return out;
 }

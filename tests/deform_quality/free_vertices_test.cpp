@@ -140,23 +140,7 @@ void adoptionChecks(const std::string& which, int bound_total, int bound_region)
   EXPECT_EQ(primitivePart("torso"), "torso");
 
   auto b = test::realBody(after->avatar);
-  PosedPrimitives rest;
-  std::vector<glm::mat4> identity(static_cast<std::size_t>(b->skeleton.jointCount()),
-                                  glm::mat4(1.0f));
-  posePrimitives(b->model.primitives, identity, rest);
-  for (int v = 0; v < b->mesh.vertexCount(); ++v) {
-    const auto vi = static_cast<std::size_t>(v);
-    if (b->model.calibration.vertex_class[vi] == VertexClass::kFree) continue;
-    const float f =
-        b->model.calibration.w[vi] * vertexDensity(b->model, rest, v, b->mesh.positions[vi]);
-    ASSERT_NEAR(f, b->model.primitives.iso, 1e-5f) << which << " vertex " << v;
-  }
-  test::Scene scene;
-  scene.bodies = {b.get()};
-  scene.step(0.0);
-  EXPECT_LT(test::maxDisplacement(*b), 1e-5f);
-  EXPECT_EQ(b->state.counters.unsolved_vertices, 0);
-  EXPECT_EQ(b->state.counters.contact_vertices, 0);
+  test::expectRestsExactly(*b, which);
 }
 
 TEST(FreeVertices, DefaultAvatarAdopted) { adoptionChecks("default", 40, 20); }  // measured 2
@@ -178,43 +162,10 @@ struct Approach {
 
 Approach approachBall(const test::Body& b, const AvatarModel& avatar, int stride) {
   Approach out;
-  const float r = kBallRadius;
-  const BodyView view{nullptr, &b.posed};
-  BallStepOptions still;
-  still.gravity = glm::vec3(0.0f);
-  still.floor = false;
-  const auto touches = [&](const glm::vec3& c) {
-    BallState ball;
-    ball.position = c;
-    ball.radius = r;
-    return stepBall(ball, {&view, 1}, 1e-6f, still).contact_count > 0;
-  };
-  const auto deepest = [&](const glm::vec3& c, int& at) {
-    float depth = -INFINITY;
-    for (std::size_t x = 0; x < b.rigid_pos.size(); ++x) {
-      const float d = r - glm::length(b.rigid_pos[x] - c);
-      if (d > depth) {
-        depth = d;
-        at = static_cast<int>(x);
-      }
-    }
-    return depth;
-  };
   for (int v = 0; v < b.mesh.vertexCount(); v += stride) {
-    const auto vi = static_cast<std::size_t>(v);
-    const glm::vec3 n = glm::normalize(b.rigid_nrm[vi]);
-    const glm::vec3 x0 = b.rigid_pos[vi];
-    int at = -1;
-    if (deepest(x0 + (r + 0.06f) * n, at) > 0.0f) continue;
-    float t = 0.06f;
-    while (t > -0.06f && !touches(x0 + (r + t) * n)) t -= 0.001f;
-    float apart = t + 0.001f;
-    for (int i = 0; i < 7; ++i) {
-      const float mid = 0.5f * (apart + t);
-      (touches(x0 + (r + mid) * n) ? t : apart) = mid;
-    }
-    const float depth = deepest(x0 + (r + t) * n, at);
-    const auto ai = static_cast<std::size_t>(at);
+    const std::optional<test::BallTouch> touch = test::rigidBallTouch(b, v, kBallRadius);
+    if (!touch) continue;
+    const auto ai = static_cast<std::size_t>(touch->vertex);
     if (b.model.calibration.vertex_class[ai] == VertexClass::kFree) {
       ++out.free_samples;
       continue;
@@ -222,9 +173,9 @@ Approach approachBall(const test::Body& b, const AvatarModel& avatar, int stride
     ++out.samples;
     const std::string part = region(avatar, ai);
     if (part == "fingers" || part == "toes") ++out.adopted_samples;
-    if (depth > out.worst) {
-      out.worst = depth;
-      out.worst_vertex = at;
+    if (touch->depth > out.worst) {
+      out.worst = touch->depth;
+      out.worst_vertex = touch->vertex;
     }
   }
   return out;
