@@ -183,35 +183,56 @@ TEST(InnerLayers, BadInputIsAnError) {
   EXPECT_FALSE(carryInnerLayersRigidly(std::vector<std::uint8_t>{1}, c).ok());
 }
 
+// The avatar with inner parts and its model built from the default humanoid map, as
+// test::realAvatar builds the plain one (built once per process).
+struct BuiltInner {
+  InnerAvatar ia;
+  ImplicitModel model;
+  BuildReport report;
+};
+const BuiltInner& builtInner() {
+  static const BuiltInner built = [] {
+    BuiltInner b;
+    b.ia = innerAvatar();
+    Result<std::vector<JointMap>> maps = loadJointMaps();
+    EXPECT_TRUE(maps.ok());
+    if (!maps) return b;
+    Result<const JointMap*> map = selectJointMap(*maps, b.ia.avatar.skeleton);
+    Result<PrimitiveMapSpec> spec = loadPrimitiveMap();
+    EXPECT_TRUE(map.ok() && spec.ok());
+    if (!map || !spec) return b;
+    Result<ImplicitModel> model = buildImplicitModel(b.ia.avatar, *spec, *map, {}, &b.report);
+    EXPECT_TRUE(model.ok()) << model.error().message;
+    if (model) b.model = std::move(*model);
+    return b;
+  }();
+  return built;
+}
+
 // The built model carries the added parts rigidly; a ball pressed into the face while the
 // head nods dents the outer skin and leaves every inner vertex at its skinned position.
 TEST(InnerLayers, CarriedRigidlyUnderABallInTheFace) {
-  const InnerAvatar ia = innerAvatar();
-  Result<std::vector<JointMap>> maps = loadJointMaps();
-  ASSERT_TRUE(maps.ok());
-  Result<const JointMap*> map = selectJointMap(*maps, ia.avatar.skeleton);
-  ASSERT_TRUE(map.ok());
-  Result<PrimitiveMapSpec> spec = loadPrimitiveMap();
-  ASSERT_TRUE(spec.ok());
-  BuildReport report;
-  Result<ImplicitModel> model = buildImplicitModel(ia.avatar, *spec, *map, {}, &report);
-  ASSERT_TRUE(model.ok()) << model.error().message;
+  const BuiltInner& built = builtInner();
+  const InnerAvatar& ia = built.ia;
+  ASSERT_FALSE(built.model.primitives.items.empty());
+  const ImplicitModel& model = built.model;
+  const BuildReport& report = built.report;
   const std::size_t nv = ia.avatar.skin.positions.size();
   EXPECT_EQ(report.calibration.inner, static_cast<int>(nv - ia.outer_count));
   for (std::size_t v = 0; v < nv; ++v) {
-    ASSERT_EQ(innerVertex(model->calibration, v), v >= ia.outer_count) << "vertex " << v;
+    ASSERT_EQ(innerVertex(model.calibration, v), v >= ia.outer_count) << "vertex " << v;
   }
   // The flag survives the model's bytes.
   Result<ImplicitModel> back = decodeImplicitModel(
-      encodeImplicitModel(*model), ia.avatar.skeleton.jointCount(), static_cast<int>(nv));
+      encodeImplicitModel(model), ia.avatar.skeleton.jointCount(), static_cast<int>(nv));
   ASSERT_TRUE(back.ok()) << back.error().message;
-  EXPECT_EQ(back->calibration.rigid, model->calibration.rigid);
+  EXPECT_EQ(back->calibration.rigid, model.calibration.rigid);
 
   test::Body body;
   body.name = "inner";
   body.skeleton = ia.avatar.skeleton;
   body.mesh = ia.avatar.skin;
-  body.model = std::move(*model);
+  body.model = model;
   body.init();
   const Posture rest = body.posture;
   const int head = findHeadJoint(body.skeleton);
@@ -269,21 +290,10 @@ TEST(InnerLayers, CarriedRigidlyUnderABallInTheFace) {
 // very primitives of the avatar without them (fitted to them, the head's primitive shrank
 // inside the skin: r_in 7.07 cm against 7.70).
 TEST(InnerLayers, FitNoPrimitive) {
-  Result<std::vector<JointMap>> maps = loadJointMaps();
-  ASSERT_TRUE(maps.ok());
-  Result<PrimitiveMapSpec> spec = loadPrimitiveMap();
-  ASSERT_TRUE(spec.ok());
-  const auto build = [&](const AvatarModel& avatar) {
-    Result<const JointMap*> map = selectJointMap(*maps, avatar.skeleton);
-    EXPECT_TRUE(map.ok());
-    Result<ImplicitModel> model = buildImplicitModel(avatar, *spec, *map, {}, nullptr);
-    EXPECT_TRUE(model.ok()) << model.error().message;
-    return model.ok() ? std::move(*model) : ImplicitModel{};
-  };
-  Result<AvatarModel> plain = makeDefaultAvatar();
-  ASSERT_TRUE(plain.ok());
-  const ImplicitModel without = build(*plain);
-  const ImplicitModel with = build(innerAvatar().avatar);
+  const test::RealAvatar* plain = test::realAvatar("default");
+  ASSERT_NE(plain, nullptr);
+  const ImplicitModel& without = plain->model;
+  const ImplicitModel& with = builtInner().model;
   ASSERT_EQ(with.primitives.items.size(), without.primitives.items.size());
   ASSERT_FALSE(with.primitives.items.empty());
   for (std::size_t k = 0; k < with.primitives.items.size(); ++k) {
