@@ -81,16 +81,16 @@ inline std::array<StationFilterParams, kBodySiteCount> defaultStationFilters() {
   chest.position_beta = 5.0f;
   // Feet (filtered at the ankle): still while planted, fast in a step: 1 Hz rising by 20 Hz per
   // m/s (a planted foot's noise reaches the knee of a nearly straight leg many times over), and
-  // the output 25 ms behind the asked time: about one reading interval at the 40 Hz a foot gets
-  // when six stations share 240 Hz, so the foot is interpolated between its readings rather
-  // than extrapolated past the newest. A kick's foot reverses at 3-5 m/s; extrapolated over a
+  // the output one reading interval behind the asked time (25 ms at the 40 Hz a foot gets when
+  // six stations share 240 Hz), so the foot is interpolated between its readings rather than
+  // extrapolated past the newest. A kick's foot reverses at 3-5 m/s; extrapolated over a
   // reading's age it overshot by 10-25 cm and came back (CMU 131 clips, bench_posture
   // /sensors:6: largest jump 1.6-2.4x the clip's, 1.1-1.4x with the delay; legs MPJPE and the
   // jitter a little lower, on the gesture clips too, than at 1 Hz + 10 Hz per m/s undelayed).
   for (BodySite foot : {BodySite::kLeftFoot, BodySite::kRightFoot}) {
     f[static_cast<std::size_t>(foot)].position_cutoff_hz = 1.0f;
     f[static_cast<std::size_t>(foot)].position_beta = 20.0f;
-    f[static_cast<std::size_t>(foot)].delay_s = 0.025;
+    f[static_cast<std::size_t>(foot)].delay_intervals = 1.0;
   }
   return f;
 }

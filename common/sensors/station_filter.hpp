@@ -17,8 +17,9 @@
 // each reading's noise (its gain on the newest reading): that, not the corner, sets the
 // floor under the jitter.
 //
-// Output: the estimate extrapolated by its own motion model to the asked time less delay_s
-// (the reading's age: latency and, with a shared update rate, the other stations' turns), so
+// Output: the estimate extrapolated by its own motion model to the asked time less the delay
+// (delay_s plus delay_intervals reading intervals: the reading's age, latency and, with a
+// shared update rate, the other stations' turns), so
 // time keeps running between readings. A new reading changes that trajectory; the change
 // (the old output minus the new trajectory, in value, velocity and acceleration, at the
 // reading) is folded in along the minimum-jerk path: the quintic that starts at that
@@ -67,8 +68,11 @@ struct StationFilterParams {
   double max_extrapolate_s = 0.2;  // never extrapolate further past the last reading
   // The output is the estimate this long before the asked time (lag spent on less
   // extrapolation: a shorter prediction amplifies the readings' noise and the motion's own
-  // high frequencies less). 0: the estimate at the asked time.
+  // high frequencies less). 0: the estimate at the asked time. Plus delay_intervals of the
+  // station's own reading interval (its running mean), so that the output can be interpolated
+  // between readings, not extrapolated past the newest, at whatever rate the station reports.
   double delay_s = 0.0;
+  double delay_intervals = 0.0;
   // Where on its segment the posture solver filters a station's position: 0 at the sensor,
   // 1 at the joint the segment turns about (the elbow for a wrist sensor), between: between.
   float pivot = 1.0f;
@@ -149,7 +153,8 @@ class StationFilter {
   // taken as it is, at rest.
   void update(const glm::vec3& p, const glm::quat& q_in, double t_meas, double t_now_in,
               const StationFilterParams& params) {
-    const double t_now = t_now_in - params.delay_s;
+    delay_ = params.delay_s + (initialised_ ? params.delay_intervals * interval_ : 0.0);
+    const double t_now = t_now_in - delay_;
     const double sp = params.position_noise_m / std::sqrt(3.0);
     const double sr =
         glm::radians(static_cast<double>(params.orientation_noise_deg)) / std::sqrt(3.0);
@@ -216,7 +221,7 @@ class StationFilter {
 
   // The eased estimate at time t (at or after the last update's t_now).
   void evaluate(double t, const StationFilterParams& params, glm::vec3& p, glm::quat& q) const {
-    const Poly o = blendedAt(t - params.delay_s, params);
+    const Poly o = blendedAt(t - delay_, params);
     p = glm::vec3(o.x);
     q = o.q;
   }
@@ -286,10 +291,10 @@ class StationFilter {
     return s;
   }
 
-  static Poly at(const Poly& s, double t, const StationFilterParams& params) {
-    // (Back along the trajectory, by at most delay_s, when a delay puts t before the
+  Poly at(const Poly& s, double t, const StationFilterParams& params) const {
+    // (Back along the trajectory, by at most the delay, when a delay puts t before the
     // reading.)
-    const double tau = std::clamp(t - s.t, -params.delay_s, params.max_extrapolate_s);
+    const double tau = std::clamp(t - s.t, -delay_, params.max_extrapolate_s);
     Poly o;
     o.t = t;
     o.x = s.x + s.v * tau + s.a * (0.5 * tau * tau);
@@ -326,6 +331,7 @@ class StationFilter {
   glm::quat q0_{1.0f, 0.0f, 0.0f, 0.0f};
   double t0_ = 0.0;        // time of the last reading
   double interval_ = 0.0;  // running mean of the reading interval
+  double delay_ = 0.0;     // the output's delay (s), set at each reading
   double blend_t0_ = 0.0;
   double speed_p_ = 0.0, speed_r_ = 0.0;  // low-passed speeds, m/s and rad/s
   Poly now_;

@@ -121,6 +121,19 @@ TEST(StationFilter, DelaySpendsLagOnLessExtrapolation) {
   }
 }
 
+TEST(StationFilter, DelayInReadingIntervalsFollowsTheReadingRate) {
+  // delay_intervals = 1 at 30 Hz readings: one reading interval (4 ticks) late, as delay_s of
+  // 1/30 s would be; the interval is the station's own, measured from its readings.
+  StationFilterParams params;
+  params.delay_intervals = 1.0;
+  const std::vector<glm::vec3> out = run(params, ramp, 0.0f, 600);
+  const double interval = kEvery * kTick;
+  for (std::size_t k = 360; k < out.size(); ++k) {
+    const double t = static_cast<double>(k) * kTick;
+    EXPECT_NEAR(out[k].x, ramp(t - interval), 5e-4) << k;
+  }
+}
+
 TEST(StationFilter, NoiseFiguresAndCornersFromTheSensorsConfig) {
   auto setup = parseSensorSetup(R"(
 [tracker]
