@@ -2,13 +2,15 @@
 // by frame against dual-quaternion skinning of the same frames (issue 25). Asserted: no
 // spikes (no vertex moved farther than what it resolves allows, see allowance()) and no
 // face turned inside out against skinning away from contacts (restoreFaceOrientation()
-// keeps that). Measured and printed, not yet asserted: folds away from contacts
-// (self-intersecting triangle pairs against skinning, in total and in each body region).
-// Over every one of the 96 frames they total at or below skinning's on both avatars and all
-// shared clips but two CMU clips on the default avatar (371 against 340, 342 against 330);
-// what remains per region is a few pairs at the hips and knees of the CMU clips, where the
-// own field pushes out beside vertices whose field is faded (the primitives lie inside the
-// skin, issue 25 item 5). The clips are motion the model was not tuned on.
+// keeps that). Folds away from contacts (self-intersecting triangle pairs against skinning,
+// in total and in each body region, over 6-7 frames of each clip): issue 25 item 2 asks for
+// no more than skinning anywhere. Measured: per clip at or below skinning's total on both
+// avatars and every clip but the bundled clap (34 against 27) and scaled_131_03 (2 against
+// 0) on the default avatar; per region and frame at or below skinning's but in three
+// region-frames, one pair over in each (the default avatar's right knee on scaled_131_03,
+// MakeHuman's hips on 131_01 and 131_02). Asserted, as guards until the target is met: no
+// region-frame more than kRegionFoldSlack pairs over, no clip more than
+// clipFoldBound(skinning's). The clips are motion the model was not tuned on.
 #include <algorithm>
 #include <cstdio>
 #include <map>
@@ -33,6 +35,10 @@ constexpr int kFramesPerClip = 96;         // spread evenly over each clip, play
 constexpr int kFoldFrames = 6;             // of them, those whose folds are counted (evenly spread)
 constexpr float kOwnMargin = 0.005f;       // metres the own field may add to a vertex's drift
 constexpr float kExcessTolerance = 1e-4f;  // metres: rounding (the bound is computed twice)
+constexpr int kRegionFoldSlack = 1;        // pairs a region may have over skinning in a frame
+
+// The most intersecting pairs a clip's fold frames may total, against skinning's.
+long clipFoldBound(long skinned) { return skinned + std::max(2L, (skinned * 3) / 10); }
 
 // How far the deformation may move vertex v from its skinned position: the skinning's drift
 // from where its own primitives' bones alone would carry it (what its own field corrects:
@@ -84,7 +90,8 @@ struct ClipMeasures {
   long pairs_rigid = 0, pairs_deformed = 0;
   std::map<std::string, std::pair<long, long>> region_pairs;  // rigid, deformed (sums)
   std::vector<std::string> fold_failures;                     // frame/region where worse
-  int inverted = 0;  // faces turned against the skinned skin's, outside contacts
+  int worst_region_excess = 0;  // most pairs a region had over skinning in one frame
+  int inverted = 0;             // faces turned against the skinned skin's, outside contacts
 };
 
 ClipMeasures play(const test::RealAvatar& a, const MotionClip& clip) {
@@ -151,6 +158,7 @@ ClipMeasures play(const test::RealAvatar& a, const MotionClip& clip) {
       auto& sum = m.region_pairs[regions.names[r]];
       sum.first += rigid;
       sum.second += deformed;
+      m.worst_region_excess = std::max(m.worst_region_excess, deformed - rigid);
       if (deformed > rigid) {
         m.fold_failures.push_back("frame " + std::to_string(f) + " " + regions.names[r] + ": " +
                                   std::to_string(deformed) + " pairs against " +
@@ -197,6 +205,13 @@ void check(const std::string& avatar, const std::string& clip_name, const ClipMe
   std::printf("  regions with more intersecting pairs than skinning: %zu region-frames%s%s\n",
               m.fold_failures.size(), m.fold_failures.empty() ? "" : ", first: ",
               m.fold_failures.empty() ? "" : m.fold_failures.front().c_str());
+  EXPECT_LE(m.worst_region_excess, kRegionFoldSlack)
+      << avatar << " " << clip_name << ": " << m.fold_failures.size()
+      << " region-frames with more folds than skinning, first: "
+      << (m.fold_failures.empty() ? "" : m.fold_failures.front());
+  EXPECT_LE(m.pairs_deformed, clipFoldBound(m.pairs_rigid))
+      << avatar << " " << clip_name << ": intersecting pairs " << m.pairs_deformed
+      << " deformed against " << m.pairs_rigid << " skinned";
 }
 
 const char* const kSharedClips[] = {
