@@ -10,7 +10,6 @@
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/Sparse>
 
-#include "common/deform/inner_layers.hpp"
 #include "common/deform/posed_primitives.hpp"
 #include "common/deform/vertex_field.hpp"
 
@@ -467,11 +466,6 @@ void computeRelaxationWeights(std::span<const glm::vec3> pos, std::span<const gl
     c.ring.insert(c.ring.end(), ordered.begin(), ordered.end());
     c.ring_weights.insert(c.ring_weights.end(), weights.begin(), weights.end());
     c.ring_offsets[v + 1] = static_cast<std::uint32_t>(c.ring.size());
-  }
-  // Inner layers (eyes, teeth, tongue): carried rigidly by their skinning (inner_layers.hpp).
-  if (Result<InnerLayers> layers = findInnerLayers(pos, indices);
-      layers && layers->inner_vertices > 0) {
-    static_cast<void>(carryInnerLayersRigidly(layers->inner, c));
   }
 }
 

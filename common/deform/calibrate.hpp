@@ -68,9 +68,6 @@ void fitSkinWeights(ImplicitModel& model, std::span<const glm::vec3> rest_positi
 // and mean-value coordinates of the vertex in the ring projected on its tangent plane
 // (uniform weights where the ring is open, non-manifold or not star-shaped), so that the
 // rest mesh is a fixed point of the relaxation. Fills ring_offsets, ring, ring_weights.
-// Also finds the mesh's inner layers (findInnerLayers) and, where vertex_class and prims are
-// already set (the builder sets them first), makes their vertices carried rigidly
-// (carryInnerLayersRigidly, inner_layers.hpp): calibrateModel then keeps them so.
 void computeRelaxationWeights(std::span<const glm::vec3> rest_positions,
                               std::span<const glm::vec3> rest_normals,
                               std::span<const std::uint32_t> indices, Calibration& calibration);

@@ -9,6 +9,7 @@
 #include <memory>
 #include <numeric>
 
+#include "common/anim/seam_copies.hpp"
 #include "common/base/disjoint_sets.hpp"
 
 namespace vistel {
@@ -179,19 +180,8 @@ Result<InnerLayers> findInnerLayers(std::span<const glm::vec3> pos,
     uf.join(idx[f], idx[f + 1]);
     uf.join(idx[f], idx[f + 2]);
   }
-  std::vector<std::uint32_t> by_position(nv);
-  std::iota(by_position.begin(), by_position.end(), std::uint32_t{0});
-  const auto less = [pos](std::uint32_t a, std::uint32_t b) {
-    const glm::vec3 &p = pos[a], &q = pos[b];
-    if (p.x != q.x) return p.x < q.x;
-    if (p.y != q.y) return p.y < q.y;
-    if (p.z != q.z) return p.z < q.z;
-    return a < b;
-  };
-  std::sort(by_position.begin(), by_position.end(), less);
-  for (std::size_t i = 1; i < nv; ++i) {
-    if (pos[by_position[i]] == pos[by_position[i - 1]]) uf.join(by_position[i], by_position[i - 1]);
-  }
+  const std::vector<std::uint32_t> first = firstCopies(pos);
+  for (std::size_t v = 0; v < nv; ++v) uf.join(static_cast<std::uint32_t>(v), first[v]);
 
   // Number the roots that hold a triangle; count vertices and triangles.
   InnerLayers out;

@@ -139,14 +139,25 @@ void capIntegral(const PosedPrimitive& p, const glm::vec3& c, float r, const glm
     for (int k = 0; k < kCapAzimuths; ++k) {
       const float b = (static_cast<float>(k) + 0.5f * static_cast<float>(j & 1)) * d_phi;
       const glm::vec3 q = c + r * (-ct * normal + st * (std::cos(b) * e1 + std::sin(b) * e2));
-      float sc;
-      const glm::vec3 d = skeletonOffset(p.shape, q, sc);
-      const float units = sc > 0.0f ? 1.0f / sc : 1.0f;
-      const float surface = skinSurfaceDistance(p, skinWeight(p, q, d, sc)) * units;
-      const auto i = static_cast<std::size_t>(j * kCapAzimuths + k);
-      out.depth[i] = surface - std::sqrt(glm::dot(d, d));
+      out.depth[static_cast<std::size_t>(j * kCapAzimuths + k)] = skinDepth(p, q);
     }
   }
+}
+
+// The overlap the cap's samples measure past `offset` (m) of depth: the sum of each inside
+// point's depth beyond it times its area element (volume), and of those elements (area).
+Overlap capOverlap(const CapSamples& cap, float offset) {
+  Overlap o;
+  for (int j = 0; j < kIntegralRings; ++j) {
+    const float element = cap.element[static_cast<std::size_t>(j)];
+    for (int i = j * kCapAzimuths; i < (j + 1) * kCapAzimuths; ++i) {
+      const float d = cap.depth[static_cast<std::size_t>(i)] - offset;
+      if (!(d > 0.0f)) continue;
+      o.volume += d * element;
+      o.area += element;
+    }
+  }
+  return o;
 }
 
 // How deep the deepest sampled point of the ball's cap facing the skeleton (direction
@@ -286,21 +297,8 @@ Overlap overlap(float d, float r, float rs) {
 // `area` gets the contact's projected area.
 float contactForce(const Touch& t, float k, float k_body_core, float k_ball_core, float r,
                    float core_fraction, float* slope, float* area) {
-  Overlap o;
-  if (t.integrated) {
-    // Point by point over the cap, as Step 3 on a mesh: the depth times the area element.
-    for (int j = 0; j < kIntegralRings; ++j) {
-      const float element = t.cap.element[static_cast<std::size_t>(j)];
-      for (int i = j * kCapAzimuths; i < (j + 1) * kCapAzimuths; ++i) {
-        const float d = t.cap.depth[static_cast<std::size_t>(i)];
-        if (!(d > 0.0f)) continue;
-        o.volume += d * element;
-        o.area += element;
-      }
-    }
-  } else {
-    o = overlap(t.depth, r, t.surface_radius);
-  }
+  // Point by point over the cap, as Step 3 on a mesh (capOverlap), or the lens.
+  const Overlap o = t.integrated ? capOverlap(t.cap, 0.0f) : overlap(t.depth, r, t.surface_radius);
   float f = k * o.volume;
   float df = k * o.area;
   // The cores: past each, a second layer as stiff as the other body against a rigid one.
@@ -317,16 +315,7 @@ float contactForce(const Touch& t, float k, float k_body_core, float k_ball_core
     if (!(t.depth > core.depth)) continue;
     Overlap c = overlap(t.depth - core.depth, core.r_ball, core.r_body);
     if (t.integrated && core.cap) {
-      Overlap q;
-      for (int j = 0; j < kIntegralRings; ++j) {
-        const float element = t.cap.element[static_cast<std::size_t>(j)];
-        for (int i = j * kCapAzimuths; i < (j + 1) * kCapAzimuths; ++i) {
-          const float d = t.cap.depth[static_cast<std::size_t>(i)] - core.depth;
-          if (!(d > 0.0f)) continue;
-          q.volume += d * element;
-          q.area += element;
-        }
-      }
+      const Overlap q = capOverlap(t.cap, core.depth);
       if (q.volume > c.volume) c = q;
     }
     f += core.k * c.volume;

@@ -230,8 +230,8 @@ Result<ImplicitModel> buildImplicitModel(const AvatarModel& avatar, const Primit
         glm::vec3(glm::inverse(sk.inverse_bind[static_cast<std::size_t>(j)])[3]);
   }
   // Inner layers (eyes, teeth, tongue) lie inside the skin: fitted to them, the head's
-  // primitive would lie inside its skin (inner_layers.hpp; computeRelaxationWeights marks
-  // them carried rigidly).
+  // primitive would lie inside its skin. They are carried by their skinning alone
+  // (inner_layers.hpp), marked so before calibration.
   if (Result<InnerLayers> layers = findInnerLayers(mesh.positions, mesh.indices); !layers) {
     return withContext("building implicit model", layers.error());
   } else if (layers->inner_vertices > 0) {
@@ -503,6 +503,11 @@ Result<ImplicitModel> buildImplicitModel(const AvatarModel& avatar, const Primit
   // Calibration and relaxation weights.
   progress(0.6f, "relaxation weights");
   computeRelaxationWeights(mesh.positions, mesh.normals, mesh.indices, cal);
+  if (!b.inner.empty()) {
+    if (Result<int> carried = carryInnerLayersRigidly(b.inner, cal); !carried) {
+      return withContext("building implicit model", carried.error());
+    }
+  }
   progress(0.8f, "calibration");
   Result<CalibrationReport> calib =
       calibrateModel(model, mesh.positions, mesh.normals, opt.calibration);

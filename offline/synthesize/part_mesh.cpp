@@ -1,24 +1,13 @@
 #include "offline/synthesize/part_mesh.hpp"
 
-#include <bit>
 #include <cmath>
 #include <map>
-#include <unordered_map>
 
 #include <OpenMesh/Core/System/omstream.hh>
 
+#include "common/anim/seam_copies.hpp"
+
 namespace vistel {
-namespace {
-
-struct PositionHash {
-  std::size_t operator()(const glm::vec3& p) const {
-    return std::bit_cast<std::uint32_t>(p.x) * 73856093u ^
-           std::bit_cast<std::uint32_t>(p.y) * 19349663u ^
-           std::bit_cast<std::uint32_t>(p.z) * 83492791u;
-  }
-};
-
-}  // namespace
 
 PartMesh makePartMesh(TriangleSoup mesh, std::vector<glm::vec2> uvs) {
   PartMesh part;
@@ -28,12 +17,7 @@ PartMesh makePartMesh(TriangleSoup mesh, std::vector<glm::vec2> uvs) {
   if (part.uvs.size() != nv) part.uvs.clear();
 
   // Vertices at exactly the same place are one (a file repeats them at texture seams).
-  std::unordered_map<glm::vec3, std::uint32_t, PositionHash> first;
-  part.weld.resize(nv);
-  for (std::size_t v = 0; v < nv; ++v) {
-    const auto [it, added] = first.emplace(part.mesh.positions[v], static_cast<std::uint32_t>(v));
-    part.weld[v] = it->second;
-  }
+  part.weld = firstCopies(part.mesh.positions);
 
   // Area-weighted normals over the welded fans, shared by every copy of a vertex.
   std::vector<glm::vec3> sum(nv, glm::vec3(0.0f));

@@ -1,9 +1,7 @@
 #include "offline/synthesize/skin_decimation.hpp"
 
 #include <array>
-#include <bit>
 #include <cmath>
-#include <unordered_map>
 
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/System/omstream.hh>
@@ -13,6 +11,7 @@
 #include <OpenMesh/Tools/Decimater/ModNormalFlippingT.hh>
 #include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
 
+#include "common/anim/seam_copies.hpp"
 #include "offline/compare/triangle_tree.hpp"
 
 namespace vistel {
@@ -24,14 +23,6 @@ struct DecimationTraits : public OpenMesh::DefaultTraits {
 };
 using DecimationMesh = OpenMesh::TriMesh_ArrayKernelT<DecimationTraits>;
 using Decimater = OpenMesh::Decimater::DecimaterT<DecimationMesh>;
-
-struct PositionHash {
-  std::size_t operator()(const glm::vec3& p) const {
-    return std::bit_cast<std::uint32_t>(p.x) * 73856093u ^
-           std::bit_cast<std::uint32_t>(p.y) * 19349663u ^
-           std::bit_cast<std::uint32_t>(p.z) * 83492791u;
-  }
-};
 
 // ModHausdorffT's other side: a collapse is legal only when the faces it leaves around
 // the remaining vertex lie within the tolerance of the input's surface, judged at the
@@ -98,21 +89,19 @@ Result<DecimatedMesh> decimateMesh(std::span<const glm::vec3> positions,
 
   // Vertices at exactly the same place (texture seams) are one: welded[v] is the group,
   // first_copy[g] its first vertex, copies[g] how many.
+  const std::vector<std::uint32_t> first = firstCopies(positions);
   std::vector<std::uint32_t> welded(nv);
   std::vector<std::uint32_t> first_copy;
   std::vector<std::uint32_t> copies;
-  {
-    std::unordered_map<glm::vec3, std::uint32_t, PositionHash> group;
-    for (std::size_t v = 0; v < nv; ++v) {
-      const auto [it, added] =
-          group.emplace(positions[v], static_cast<std::uint32_t>(first_copy.size()));
-      if (added) {
-        first_copy.push_back(static_cast<std::uint32_t>(v));
-        copies.push_back(0);
-      }
-      welded[v] = it->second;
-      ++copies[it->second];
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (first[v] == v) {
+      welded[v] = static_cast<std::uint32_t>(first_copy.size());
+      first_copy.push_back(static_cast<std::uint32_t>(v));
+      copies.push_back(0);
+    } else {
+      welded[v] = welded[first[v]];
     }
+    ++copies[welded[v]];
   }
   const std::size_t ng = first_copy.size();
 
