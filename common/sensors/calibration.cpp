@@ -14,8 +14,6 @@ float safeRatio(float num, float den) {
   return (k > 0.5f && k < 2.0f) ? k : 1.0f;  // outside this the reading is not a person
 }
 
-glm::quat worldRotation(const glm::mat4& m) { return glm::normalize(glm::quat_cast(glm::mat3(m))); }
-
 }  // namespace
 
 void BodyCalibration::toModel(BodySite site, const glm::vec3& position,

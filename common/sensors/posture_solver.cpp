@@ -11,8 +11,6 @@ namespace {
 const glm::vec3 kUp(0.0f, 1.0f, 0.0f);
 constexpr glm::quat kIdentity(1.0f, 0.0f, 0.0f, 0.0f);
 
-glm::quat worldRotation(const glm::mat4& m) { return glm::normalize(glm::quat_cast(glm::mat3(m))); }
-
 float smoothstep(float e0, float e1, float x) {
   const float t = std::clamp((x - e0) / (e1 - e0), 0.0f, 1.0f);
   return t * t * (3.0f - 2.0f * t);

@@ -29,6 +29,11 @@ inline float twistAngle(const glm::quat& q, const glm::vec3& axis) {
   return a;
 }
 
+// The rotation part of a rigid transform.
+inline glm::quat worldRotation(const glm::mat4& m) {
+  return glm::normalize(glm::quat_cast(glm::mat3(m)));
+}
+
 // Rotation vector (axis * angle) of a rotation, shortest way round.
 inline glm::vec3 rotationVector(const glm::quat& q_in) {
   const glm::quat q = q_in.w < 0.0f ? -q_in : q_in;

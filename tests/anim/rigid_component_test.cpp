@@ -120,7 +120,7 @@ Model makeTorso() {
 
 // The arm of skinning_test: upper (root) along +X to the elbow at L, fore from L to 2L,
 // blended over +-6 cm around the elbow.
-Model makeArm(float length = 0.3f, float radius = 0.04f) {
+Model makeRigArm(float length = 0.3f, float radius = 0.04f) {
   Model arm;
   Skeleton& s = arm.skeleton;
   s.names = {"upper", "fore"};
@@ -134,19 +134,19 @@ Model makeArm(float length = 0.3f, float radius = 0.04f) {
   return arm;
 }
 
-struct Posed {
+struct RigPosed {
   std::vector<glm::vec3> positions, normals;
   SkinningRig rig;
   RigFrame frame;
 };
 
-Posed pose(const Model& m, const Posture& posture, SkinningMethod method) {
+RigPosed pose(const Model& m, const Posture& posture, SkinningMethod method) {
   const auto n = static_cast<std::size_t>(m.skeleton.jointCount());
   std::vector<glm::mat4> model(n), skin(n);
   std::vector<DualQuat> dq(n);
   poseSkeleton(m.skeleton, posture, model);
   skinningMatrices(m.skeleton, model, skin);
-  Posed out;
+  RigPosed out;
   out.rig = makeSkinningRig(m.skeleton, m.mesh, method);
   out.positions.resize(m.mesh.positions.size());
   out.normals.resize(m.mesh.positions.size());
@@ -202,7 +202,7 @@ TEST(RigidComponent, MethodNamesRoundTrip) {
 }
 
 TEST(RigidComponent, FixturesAreValid) {
-  for (const Model& m : {makeTorso(), makeArm()}) {
+  for (const Model& m : {makeTorso(), makeRigArm()}) {
     ASSERT_TRUE(validateSkeleton(m.skeleton).ok());
     const Status s = validateSkinMesh(m.mesh, m.skeleton.jointCount());
     ASSERT_TRUE(s.ok()) << s.error().message;
@@ -212,7 +212,7 @@ TEST(RigidComponent, FixturesAreValid) {
 
 TEST(RigidComponent, RestPostureGivesRestPositionsForEveryMethod) {
   Model torso = makeTorso();
-  Model arm = makeArm();
+  Model arm = makeRigArm();
   // Non-identity rest rotations and an offset root make it meaningful.
   torso.skeleton.rest_local[0].rotation = glm::angleAxis(0.5f, glm::normalize(glm::vec3(1, 2, 3)));
   torso.skeleton.rest_local[2].rotation = glm::angleAxis(-0.3f, glm::vec3(0, 0, 1));
@@ -223,7 +223,7 @@ TEST(RigidComponent, RestPostureGivesRestPositionsForEveryMethod) {
   computeInverseBind(arm.skeleton);
   for (const Model* m : {&torso, &arm}) {
     for (SkinningMethod method : kAllMethods) {
-      const Posed posed = pose(*m, restPosture(m->skeleton), method);
+      const RigPosed posed = pose(*m, restPosture(m->skeleton), method);
       for (std::size_t v = 0; v < posed.positions.size(); ++v) {
         ASSERT_LT(glm::length(posed.positions[v] - m->mesh.positions[v]), 2e-6f)
             << skinningMethodName(method) << " vertex " << v;
@@ -241,7 +241,7 @@ TEST(RigidComponent, WholeBodyMotionIsRigidForEveryMethod) {
   p.rotations[0] = turn;
   p.root_translation = glm::vec3(0.4f, 1.2f, -2.0f);
   for (SkinningMethod method : kAllMethods) {
-    const Posed posed = pose(torso, p, method);
+    const RigPosed posed = pose(torso, p, method);
     for (std::size_t v = 0; v < posed.positions.size(); ++v) {
       const glm::vec3 expected =
           turn * (torso.mesh.positions[v] - glm::vec3(0, 1, 0)) + p.root_translation;
@@ -270,9 +270,9 @@ TEST(RigidComponent, SpineLatticeFindsTheChainAndTheTorso) {
 TEST(RigidComponent, SpineLatticeBendsTheTorsoSmoothly) {
   const Model torso = makeTorso();
   const Posture p = bent(torso.skeleton, 0.5f);  // 3 x ~29 degrees forward
-  const Posed ffd = pose(torso, p, SkinningMethod::kSpineFfd);
-  const Posed lbs = pose(torso, p, SkinningMethod::kLinear);
-  const Posed dqs = pose(torso, p, SkinningMethod::kDualQuaternion);
+  const RigPosed ffd = pose(torso, p, SkinningMethod::kSpineFfd);
+  const RigPosed lbs = pose(torso, p, SkinningMethod::kLinear);
+  const RigPosed dqs = pose(torso, p, SkinningMethod::kDualQuaternion);
   ASSERT_EQ(ffd.rig.method, SkinningMethod::kSpineFfd) << ffd.rig.warning;
 
   // The rest and posed spine curves, densely sampled.
@@ -297,7 +297,7 @@ TEST(RigidComponent, SpineLatticeBendsTheTorsoSmoothly) {
   }
   EXPECT_GE(worst, -1e-3f);
   // Volume: the sweep keeps it better than LBS.
-  const auto volume = [&](const Posed& q) {
+  const auto volume = [&](const RigPosed& q) {
     return enclosedVolume(q.positions, torso.mesh.indices);
   };
   const double rest = enclosedVolume(torso.mesh.positions, torso.mesh.indices);
@@ -337,8 +337,8 @@ TEST(RigidComponent, SpineLatticeLeavesVerticesOffTheChainToDualQuaternions) {
   }
   Posture p = bent(torso.skeleton, 0.3f);
   p.rotations[7] = glm::angleAxis(0.8f, glm::vec3(0, 0, 1));
-  const Posed ffd = pose(torso, p, SkinningMethod::kSpineFfd);
-  const Posed dqs = pose(torso, p, SkinningMethod::kDualQuaternion);
+  const RigPosed ffd = pose(torso, p, SkinningMethod::kSpineFfd);
+  const RigPosed dqs = pose(torso, p, SkinningMethod::kDualQuaternion);
   for (std::size_t v = first_arm; v < torso.mesh.positions.size(); ++v) {
     ASSERT_EQ(ffd.positions[v], dqs.positions[v]) << "vertex " << v;
     ASSERT_EQ(ffd.normals[v], dqs.normals[v]) << "vertex " << v;
@@ -346,7 +346,7 @@ TEST(RigidComponent, SpineLatticeLeavesVerticesOffTheChainToDualQuaternions) {
 }
 
 TEST(RigidComponent, SlerpKeepsSingleBoneVerticesRigid) {
-  const Model arm = makeArm();
+  const Model arm = makeRigArm();
   Posture p = restPosture(arm.skeleton);
   p.rotations[0] = glm::angleAxis(0.8f, glm::normalize(glm::vec3(0.3f, 1.0f, 0.2f)));
   p.rotations[1] = glm::angleAxis(1.2f, glm::normalize(glm::vec3(0.0f, 0.4f, 1.0f)));
@@ -354,7 +354,7 @@ TEST(RigidComponent, SlerpKeepsSingleBoneVerticesRigid) {
   std::vector<glm::mat4> model(2), skin(2);
   poseSkeleton(arm.skeleton, p, model);
   skinningMatrices(arm.skeleton, model, skin);
-  const Posed slerp = pose(arm, p, SkinningMethod::kRigidSlerp);
+  const RigPosed slerp = pose(arm, p, SkinningMethod::kRigidSlerp);
   int rigid = 0;
   for (std::size_t v = 0; v < slerp.positions.size(); ++v) {
     for (std::size_t s = 0; s < 2; ++s) {
@@ -370,11 +370,11 @@ TEST(RigidComponent, SlerpKeepsSingleBoneVerticesRigid) {
 }
 
 TEST(RigidComponent, SlerpHasNoCandyWrapperAtAHalfTurnTwist) {
-  const Model arm = makeArm();
+  const Model arm = makeRigArm();
   Posture p = restPosture(arm.skeleton);
   p.rotations[1] = glm::angleAxis(std::numbers::pi_v<float>, glm::vec3(1, 0, 0));
-  const Posed lbs = pose(arm, p, SkinningMethod::kLinear);
-  const Posed slerp = pose(arm, p, SkinningMethod::kRigidSlerp);
+  const RigPosed lbs = pose(arm, p, SkinningMethod::kLinear);
+  const RigPosed slerp = pose(arm, p, SkinningMethod::kRigidSlerp);
   // Radius about the arm's axis of every ring vertex (the cap centres lie on it).
   float lbs_min = 1.0f, slerp_min = 1.0f, slerp_max = 0.0f;
   for (std::size_t v = 0; v + 2 < arm.mesh.positions.size(); ++v) {
@@ -394,7 +394,7 @@ TEST(RigidComponent, SlerpHasNoCandyWrapperAtAHalfTurnTwist) {
 }
 
 TEST(RigidComponent, SlerpRoundsABentElbowLikeDualQuaternions) {
-  const Model arm = makeArm();
+  const Model arm = makeRigArm();
   Posture p = restPosture(arm.skeleton);
   p.rotations[1] = glm::angleAxis(1.6f, glm::vec3(0, 0, 1));
   const double rest = enclosedVolume(arm.mesh.positions, arm.mesh.indices);
@@ -406,11 +406,11 @@ TEST(RigidComponent, SlerpRoundsABentElbowLikeDualQuaternions) {
 
 TEST(RigidComponent, NoSpineChainFallsBackToDualQuaternionsWithAMessage) {
   // The arm has no head; a skeleton whose head has a single skinned ancestor has no chain.
-  const Model arm = makeArm();
+  const Model arm = makeRigArm();
   Posture p = restPosture(arm.skeleton);
   p.rotations[1] = glm::angleAxis(1.0f, glm::vec3(0, 0, 1));
-  const Posed ffd = pose(arm, p, SkinningMethod::kSpineFfd);
-  const Posed dqs = pose(arm, p, SkinningMethod::kDualQuaternion);
+  const RigPosed ffd = pose(arm, p, SkinningMethod::kSpineFfd);
+  const RigPosed dqs = pose(arm, p, SkinningMethod::kDualQuaternion);
   EXPECT_EQ(ffd.rig.requested, SkinningMethod::kSpineFfd);
   EXPECT_EQ(ffd.rig.method, SkinningMethod::kDualQuaternion);
   EXPECT_NE(ffd.rig.warning.find("falls back to dqs"), std::string::npos) << ffd.rig.warning;
@@ -418,7 +418,7 @@ TEST(RigidComponent, NoSpineChainFallsBackToDualQuaternionsWithAMessage) {
   EXPECT_EQ(ffd.positions, dqs.positions);
   EXPECT_EQ(ffd.normals, dqs.normals);
 
-  Model short_neck = makeArm();
+  Model short_neck = makeRigArm();
   short_neck.skeleton.names = {"pelvis", "Head"};
   const SpineLattice lattice = buildSpineLattice(short_neck.skeleton, short_neck.mesh);
   EXPECT_TRUE(lattice.empty());

@@ -24,7 +24,7 @@
 namespace vistel {
 namespace {
 
-constexpr float kDt = 1.0f / 480.0f;  // fine frames: a stiff bounce lasts ~20 ms
+constexpr float kFineDt = 1.0f / 480.0f;  // fine frames: a stiff bounce lasts ~20 ms
 
 struct Target {
   const char* part;  // a primitive's name
@@ -107,7 +107,7 @@ BounceFigures bounce(const test::RealAvatar& a, const Target& target, const Ball
     // its Step 3 force from the ball), the scene's for the pair (with the soft ball's own
     // measure), and the dynamics' at the same state.
     ball_body->placement = ballPlacement(ball);
-    scene.step(k * static_cast<double>(kDt));
+    scene.step(k * static_cast<double>(kFineDt));
     glm::dvec3 mesh(0.0);
     for (const BodyContact& c : body->state.contacts) {
       if (c.partner == 1) mesh = -c.force;
@@ -115,11 +115,11 @@ BounceFigures bounce(const test::RealAvatar& a, const Target& target, const Ball
     const glm::dvec3 pair = -netContactForce(scene.contacts, 0);
     const glm::vec3 dyn = dynamicsForce(ball, avatar_view);
     // Then the dynamics' step from here; its mean force over the step makes its impulse.
-    const BallStepReport r = stepBall(ball, {&avatar_view, 1}, kDt, options);
+    const BallStepReport r = stepBall(ball, {&avatar_view, 1}, kFineDt, options);
     EXPECT_TRUE(r.valid);
     const bool contact = glm::length(mesh) > 0.0 || r.contact_count > 0;
-    impulse_mesh += 0.5 * (prev_mesh + mesh) * static_cast<double>(kDt);  // trapezoid
-    impulse_pair += 0.5 * (prev_pair + pair) * static_cast<double>(kDt);
+    impulse_mesh += 0.5 * (prev_mesh + mesh) * static_cast<double>(kFineDt);  // trapezoid
+    impulse_pair += 0.5 * (prev_pair + pair) * static_cast<double>(kFineDt);
     prev_mesh = mesh;
     prev_pair = pair;
     if (!contact) {
@@ -128,7 +128,7 @@ BounceFigures bounce(const test::RealAvatar& a, const Target& target, const Ball
     }
     touched = true;
     ++fig.frames;
-    impulse_dyn += glm::dvec3(r.total_force) * static_cast<double>(kDt);
+    impulse_dyn += glm::dvec3(r.total_force) * static_cast<double>(kFineDt);
     series.emplace_back(glm::length(mesh), glm::length(dyn));
     if (verbose) {
       std::printf("  frame %3d: avatar %8.2f N, scene's pair %8.2f N, dynamics %8.2f N\n", k,

@@ -15,23 +15,23 @@ using test::Body;
 using test::Scene;
 
 constexpr float kArmRadius = 0.04f;
-constexpr float kBallRadius = 0.05f;
+constexpr float kContactBallRadius = 0.05f;
 
 // A ball above the middle of the forearm, pressed `depth` metres into it.
-glm::vec3 ballCentre(float depth) {
-  return glm::vec3(0.45f, kArmRadius + kBallRadius - depth, 0.0f);
+glm::vec3 contactBallCentre(float depth) {
+  return glm::vec3(0.45f, kArmRadius + kContactBallRadius - depth, 0.0f);
 }
 
 BallSpec ballSpec(float stiffness) {
   BallSpec spec;
-  spec.radius = kBallRadius;
+  spec.radius = kContactBallRadius;
   spec.stiffness = stiffness;
   return spec;
 }
 
 TEST(Contact, SoftBodiesShareOneSurface) {
   auto arm = test::armBody();
-  auto ball = test::ballBody(ballSpec(3.0e4f), ballCentre(0.012f));
+  auto ball = test::ballBody(ballSpec(3.0e4f), contactBallCentre(0.012f));
   Scene scene;
   scene.bodies = {arm.get(), ball.get()};
   scene.step(0.0);
@@ -70,22 +70,23 @@ TEST(Contact, SoftBodiesShareOneSurface) {
 
 TEST(Contact, RigidPartnerLeavesItsExactImprint) {
   auto arm = test::armBody();
-  auto ball = test::ballBody(ballSpec(kRigidStiffness), ballCentre(0.015f));
+  auto ball = test::ballBody(ballSpec(kRigidStiffness), contactBallCentre(0.015f));
   ball->deform = false;
   Scene scene;
   scene.bodies = {arm.get(), ball.get()};
   scene.step(0.0);
   const PosedPrimitive& ball_prim = ball->posed.items[0];
-  const glm::vec3 c = ballCentre(0.015f);
+  const glm::vec3 c = contactBallCentre(0.015f);
   int contacts = 0;
   for (std::size_t v = 0; v < arm->mesh.positions.size(); ++v) {
     // Every arm vertex ends on or outside the ball.
     const glm::vec3 p = arm->state.positions[v];
-    EXPECT_GT(glm::length(p - c), kBallRadius - 1e-5f) << "vertex " << v << " inside the ball";
+    EXPECT_GT(glm::length(p - c), kContactBallRadius - 1e-5f)
+        << "vertex " << v << " inside the ball";
     if (arm->state.contact_body[v] != 1) continue;
     ++contacts;
     EXPECT_LT(std::abs(primitiveField(ball_prim, p) - 0.5f), 1e-4f) << "vertex " << v;
-    EXPECT_NEAR(glm::length(p - c), kBallRadius, 2e-5f) << "vertex " << v;
+    EXPECT_NEAR(glm::length(p - c), kContactBallRadius, 2e-5f) << "vertex " << v;
   }
   EXPECT_GT(contacts, 10);
 }
@@ -101,7 +102,7 @@ TEST(Contact, CollisionTermIsContinuousAcrossBothZoneBorders) {
   // And in space: along an arm vertex's normal line through both borders, the solved
   // function changes by no more than its slope allows between close samples.
   auto arm = test::armBody();
-  auto ball = test::ballBody(ballSpec(3.0e4f), ballCentre(0.012f));
+  auto ball = test::ballBody(ballSpec(3.0e4f), contactBallCentre(0.012f));
   Scene scene;
   scene.bodies = {arm.get(), ball.get()};
   scene.step(0.0);
@@ -146,7 +147,7 @@ TEST(Contact, ForcesAreEqualOppositeAndGrowWithDepth) {
   double last = 0.0;
   for (float depth : {0.004f, 0.008f, 0.012f, 0.016f}) {
     auto arm = test::armBody();
-    auto ball = test::ballBody(ballSpec(3.0e4f), ballCentre(depth));
+    auto ball = test::ballBody(ballSpec(3.0e4f), contactBallCentre(depth));
     Scene scene;
     scene.bodies = {arm.get(), ball.get()};
     scene.step(0.0);

@@ -25,8 +25,8 @@ namespace {
 
 using Avatar = test::RealAvatar;
 
-constexpr float kBallRadius = 0.1f;  // the server's default ball
-constexpr float kLimit = 0.002f;     // issue 25 item 5: at most 2 mm into the mesh
+constexpr float kServerBallRadius = 0.1f;  // the server's default ball
+constexpr float kLimit = 0.002f;           // issue 25 item 5: at most 2 mm into the mesh
 
 struct Worst {
   float depth = -INFINITY;  // metres into the mesh at first touch (negative: a gap)
@@ -56,7 +56,7 @@ void note(Worst& w, float depth, int v) {
 Approach approachBall(const test::Body& b, int stride) {
   Approach out;
   for (int v = 0; v < b.mesh.vertexCount(); v += stride) {
-    const std::optional<test::BallTouch> touch = test::rigidBallTouch(b, v, kBallRadius);
+    const std::optional<test::BallTouch> touch = test::rigidBallTouch(b, v, kServerBallRadius);
     if (!touch) {
       ++out.skipped;
       continue;
@@ -104,7 +104,7 @@ Approach measure(const Avatar& a, int stride) {
   std::printf(
       "%s: a rigid ball (r %.2f m) along the normal at every %d-th vertex, %d concave places "
       "skipped; mesh penetration at first touch, largest gap %.4f m:\n",
-      a.avatar.name.c_str(), kBallRadius, stride, ap.skipped, ap.gap);
+      a.avatar.name.c_str(), kServerBallRadius, stride, ap.skipped, ap.gap);
   printWorst("modelled skin", *b, ap.modelled);
   printWorst("free skin", *b, ap.free);
   return ap;

@@ -12,7 +12,7 @@ namespace {
 
 using test::Scene;
 
-glm::vec3 ballCentre(float depth) { return glm::vec3(0.45f, 0.04f + 0.05f - depth, 0.0f); }
+glm::vec3 dentBallCentre(float depth) { return glm::vec3(0.45f, 0.04f + 0.05f - depth, 0.0f); }
 
 BallSpec ballOf(float stiffness) {
   BallSpec spec;
@@ -24,7 +24,7 @@ BallSpec ballOf(float stiffness) {
 // Volume change of the arm with a ball pressed `depth` into the forearm.
 double armVolumeChange(float stiffness, float depth, bool propagation) {
   auto arm = test::armBody();
-  auto b = test::ballBody(ballOf(stiffness), ballCentre(depth));
+  auto b = test::ballBody(ballOf(stiffness), dentBallCentre(depth));
   b->deform = false;
   Scene scene;
   scene.bodies = {arm.get(), b.get()};
@@ -70,7 +70,7 @@ struct PressRelease {
   static BallSpec ball_spec() { return ballOf(kRigidStiffness); }
   void at(float depth, double time) {
     ball->placement[3] =
-        glm::vec4(depth > 0.0f ? ballCentre(depth) : glm::vec3(0.45f, 0.5f, 0.0f), 1.0f);
+        glm::vec4(depth > 0.0f ? dentBallCentre(depth) : glm::vec3(0.45f, 0.5f, 0.0f), 1.0f);
     scene.step(time);
   }
 };

@@ -15,11 +15,6 @@
 namespace vistel {
 namespace {
 
-bool hasWarning(const GltfImportReport& report, std::string_view text) {
-  return std::any_of(report.warnings.begin(), report.warnings.end(),
-                     [&](const std::string& w) { return w.find(text) != std::string::npos; });
-}
-
 double maxDifference(const glm::mat4& a, const glm::dmat4& b) {
   double d = 0.0;
   for (int c = 0; c < 4; ++c) {
@@ -221,7 +216,7 @@ TEST(GltfImport, RestThatDisagreesWithTheBindMatricesIsReplacedByTheBind) {
       importGltfAvatarFromMemory(chain.file.glb(), "bent.glb", "", {}, &report);
   ASSERT_TRUE(avatar.ok()) << avatar.error().message;
   EXPECT_TRUE(report.rest_from_inverse_bind);
-  EXPECT_TRUE(hasWarning(report, "disagree"))
+  EXPECT_TRUE(test::hasWarning(report, "disagree"))
       << (report.warnings.empty() ? "" : report.warnings[0]);
   expectChain(*avatar, chain, 5e-6);
 }
@@ -270,7 +265,7 @@ TEST(GltfImport, UnweightedVerticesAreBoundWithAWarning) {
       importGltfAvatarFromMemory(chain.file.glb(), "chain.glb", "", {}, &report);
   ASSERT_TRUE(avatar.ok()) << avatar.error().message;
   EXPECT_EQ(report.unweighted_vertices, 3);
-  EXPECT_TRUE(hasWarning(report, "zero total weight"));
+  EXPECT_TRUE(test::hasWarning(report, "zero total weight"));
   // The mesh node is not under a joint: each goes to its nearest joint, fully.
   for (int v : opt.unweighted) {
     const auto w = test::weightsByName(*avatar, static_cast<std::size_t>(v));

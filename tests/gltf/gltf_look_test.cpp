@@ -20,11 +20,6 @@
 namespace vistel {
 namespace {
 
-bool hasWarning(const GltfImportReport& report, std::string_view text) {
-  return std::any_of(report.warnings.begin(), report.warnings.end(),
-                     [&](const std::string& w) { return w.find(text) != std::string::npos; });
-}
-
 std::vector<std::uint8_t> halvesPng() {
   return test::makePng(16, 8, [](int x, int) {
     return x < 8 ? glm::u8vec4(220, 30, 20, 255) : glm::u8vec4(20, 40, 230, 255);
@@ -141,7 +136,7 @@ TEST(GltfLook, ExternalImageFilesAreRead) {
   EXPECT_TRUE(without->look.textures.empty());
   EXPECT_EQ(without->look.materials.size(), 1u);
   EXPECT_EQ(without->look.materials[0].base_color_texture, -1);
-  EXPECT_TRUE(hasWarning(missing, "texture dropped"))
+  EXPECT_TRUE(test::hasWarning(missing, "texture dropped"))
       << fmt::format("{}", fmt::join(missing.warnings, "\n"));
 }
 
@@ -157,7 +152,7 @@ TEST(GltfLook, BadImageAndTextureReferencesAreHandled) {
   auto a = importGltfAvatarFromMemory(webp, "webp.glb", "", {}, &report);
   ASSERT_TRUE(a.ok()) << a.error().message;
   EXPECT_TRUE(a->look.textures.empty());
-  EXPECT_TRUE(hasWarning(report, "not PNG or JPEG"))
+  EXPECT_TRUE(test::hasWarning(report, "not PNG or JPEG"))
       << fmt::format("{}", fmt::join(report.warnings, "\n"));
   // A texture index out of range: an error naming it.
   const auto bad_texture = test::editGlbJson(*glb, [](nlohmann::json& doc) {
@@ -173,7 +168,7 @@ TEST(GltfLook, BadImageAndTextureReferencesAreHandled) {
   GltfImportReport r1;
   auto c = importGltfAvatarFromMemory(set1, "set1.glb", "", {}, &r1);
   ASSERT_TRUE(c.ok()) << c.error().message;
-  EXPECT_TRUE(hasWarning(r1, "TEXCOORD_1"));
+  EXPECT_TRUE(test::hasWarning(r1, "TEXCOORD_1"));
   EXPECT_EQ(c->look.materials[0].base_color_texture, -1);
 }
 
@@ -196,7 +191,7 @@ TEST(GltfLook, TexturesAreDownscaledToFitTheAvatarSizeLimit) {
   EXPECT_EQ(report.textures_downscaled, 1);
   EXPECT_EQ(avatar->look.textures[0].width, 256);
   EXPECT_EQ(avatar->look.textures[0].height, 256);
-  EXPECT_TRUE(hasWarning(report, "downscaled from 512x512 to 256x256"))
+  EXPECT_TRUE(test::hasWarning(report, "downscaled from 512x512 to 256x256"))
       << fmt::format("{}", fmt::join(report.warnings, "\n"));
   // The downscaled texture decodes to its stated size.
   auto image = decodeTextureImage(avatar->look.textures[0].encoded, "t");
@@ -277,7 +272,7 @@ TEST(GltfVrm, Vrm0IsTurnedToFacePlusZAndItsNamesCanBeKept) {
   auto avatar = importGltfAvatarFromMemory(vrmFile(true), "old.vrm", "", keep, &report);
   ASSERT_TRUE(avatar.ok()) << avatar.error().message;
   EXPECT_EQ(report.vrm_version, "0.x");
-  EXPECT_TRUE(hasWarning(report, "jaw"));
+  EXPECT_TRUE(test::hasWarning(report, "jaw"));
   ASSERT_TRUE(report.humanoid.has_value());
   EXPECT_EQ(report.humanoid->jointFor("hips"), "J_Bip_00");
   EXPECT_EQ(report.humanoid->jointFor("r_foot"), "J_Bip_16");

@@ -4,15 +4,18 @@
 // rest rotations, an intermediate non-joint node, up to 8 influences per vertex.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <map>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <glm/glm.hpp>
 #include <nlohmann/json.hpp>
 
 #include "common/avatar/avatar_model.hpp"
+#include "offline/gltf/gltf_import.hpp"
 
 namespace vistel::test {
 
@@ -82,5 +85,11 @@ ChainGltf makeChainGltf(const ChainOptions& options = {});
 
 // Weights of vertex v of a skin as joint name -> weight (non-zero only).
 std::map<std::string, double> weightsByName(const AvatarModel& avatar, std::size_t v);
+
+// Whether the import reported a warning containing `text`.
+inline bool hasWarning(const GltfImportReport& report, std::string_view text) {
+  return std::any_of(report.warnings.begin(), report.warnings.end(),
+                     [&](const std::string& w) { return w.find(text) != std::string::npos; });
+}
 
 }  // namespace vistel::test

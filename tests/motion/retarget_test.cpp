@@ -19,15 +19,15 @@
 namespace vistel {
 namespace {
 
-struct Bone {
+struct Limb {
   const char* from;
   const char* to;
 };
-constexpr Bone kLimbs[] = {{"l_upperarm", "l_forearm"}, {"l_forearm", "l_hand"},
+constexpr Limb kLimbs[] = {{"l_upperarm", "l_forearm"}, {"l_forearm", "l_hand"},
                            {"r_upperarm", "r_forearm"}, {"r_forearm", "r_hand"},
                            {"l_thigh", "l_shin"},       {"l_shin", "l_foot"},
                            {"r_thigh", "r_shin"},       {"r_shin", "r_foot"}};
-constexpr Bone kSpine = {"spine", "neck"};
+constexpr Limb kSpine = {"spine", "neck"};
 
 JointMap mapNamed(const std::string& name) {
   Result<std::vector<JointMap>> maps = loadJointMaps("config");
@@ -63,7 +63,7 @@ struct Posed {
   glm::vec3 at(std::string_view canonical) const {
     return glm::vec3(model[static_cast<std::size_t>(index(canonical))][3]);
   }
-  glm::vec3 direction(const Bone& b) const { return glm::normalize(at(b.to) - at(b.from)); }
+  glm::vec3 direction(const Limb& b) const { return glm::normalize(at(b.to) - at(b.from)); }
   glm::quat rotation(std::string_view canonical) const {
     return glm::normalize(
         glm::quat_cast(glm::mat3(model[static_cast<std::size_t>(index(canonical))])));
@@ -78,7 +78,7 @@ float degreesBetween(glm::vec3 a, glm::vec3 b) {
 template <typename Bones>
 float worstBone(const Posed& source, const Posed& target, const Bones& bones, std::string* which) {
   float worst = 0.0f;
-  for (const Bone& b : bones) {
+  for (const Limb& b : bones) {
     const float e = degreesBetween(source.direction(b), target.direction(b));
     if (e > worst) {
       worst = e;

@@ -9,7 +9,7 @@
 namespace vistel::net {
 namespace {
 
-Posture at(double t, float x, float angle = 0.0f) {
+Posture postureAt(double t, float x, float angle = 0.0f) {
   Posture p;
   p.time = t;
   p.root_translation = {x, 1.0f, 0.0f};
@@ -19,10 +19,10 @@ Posture at(double t, float x, float angle = 0.0f) {
 
 TEST(JitterBuffer, KeepsCaptureOrderAndRefusesDuplicates) {
   JitterBuffer b(4);
-  EXPECT_EQ(b.push(1, at(0.10, 1)), JitterBuffer::Push::kAccepted);
-  EXPECT_EQ(b.push(3, at(0.30, 3)), JitterBuffer::Push::kAccepted);
-  EXPECT_EQ(b.push(2, at(0.20, 2)), JitterBuffer::Push::kAccepted);  // late, fills the gap
-  EXPECT_EQ(b.push(3, at(0.30, 3)), JitterBuffer::Push::kDuplicate);
+  EXPECT_EQ(b.push(1, postureAt(0.10, 1)), JitterBuffer::Push::kAccepted);
+  EXPECT_EQ(b.push(3, postureAt(0.30, 3)), JitterBuffer::Push::kAccepted);
+  EXPECT_EQ(b.push(2, postureAt(0.20, 2)), JitterBuffer::Push::kAccepted);  // late, fills the gap
+  EXPECT_EQ(b.push(3, postureAt(0.30, 3)), JitterBuffer::Push::kDuplicate);
   EXPECT_EQ(b.size(), 3);
   EXPECT_DOUBLE_EQ(b.oldestTime(), 0.10);
   EXPECT_DOUBLE_EQ(b.newestTime(), 0.30);
@@ -34,9 +34,10 @@ TEST(JitterBuffer, KeepsCaptureOrderAndRefusesDuplicates) {
 TEST(JitterBuffer, FullBufferDropsTheOldestAndRefusesOlder) {
   JitterBuffer b(3);
   for (int i = 0; i < 3; ++i)
-    ASSERT_EQ(b.push(static_cast<std::uint16_t>(i), at(i, i)), JitterBuffer::Push::kAccepted);
-  EXPECT_EQ(b.push(10, at(-1.0, 0)), JitterBuffer::Push::kStale);
-  EXPECT_EQ(b.push(3, at(3.0, 3)), JitterBuffer::Push::kAccepted);
+    ASSERT_EQ(b.push(static_cast<std::uint16_t>(i), postureAt(i, i)),
+              JitterBuffer::Push::kAccepted);
+  EXPECT_EQ(b.push(10, postureAt(-1.0, 0)), JitterBuffer::Push::kStale);
+  EXPECT_EQ(b.push(3, postureAt(3.0, 3)), JitterBuffer::Push::kAccepted);
   EXPECT_EQ(b.size(), 3);
   EXPECT_DOUBLE_EQ(b.oldestTime(), 1.0);
   EXPECT_DOUBLE_EQ(b.newestTime(), 3.0);
@@ -44,8 +45,8 @@ TEST(JitterBuffer, FullBufferDropsTheOldestAndRefusesOlder) {
 
 TEST(JitterBuffer, InterpolatesAndHoldsAtTheEnds) {
   JitterBuffer b(8);
-  b.push(1, at(1.0, 0.0f, 0.0f));
-  b.push(2, at(2.0, 2.0f, 1.0f));
+  b.push(1, postureAt(1.0, 0.0f, 0.0f));
+  b.push(2, postureAt(2.0, 2.0f, 1.0f));
   Posture p;
   EXPECT_TRUE(b.sample(1.5, p));
   EXPECT_NEAR(p.root_translation.x, 1.0f, 1e-5f);
@@ -63,10 +64,10 @@ TEST(JitterBuffer, InterpolatesAndHoldsAtTheEnds) {
 // whose clock stood still (equal capture times) gives finite postures.
 TEST(JitterBuffer, InterpolatesAlongACubicThroughTheNeighbours) {
   JitterBuffer b(8);
-  b.push(1, at(0.0, 0.0f));
-  b.push(2, at(1.0, 1.0f));
-  b.push(3, at(2.0, 4.0f));
-  b.push(4, at(3.0, 9.0f));
+  b.push(1, postureAt(0.0, 0.0f));
+  b.push(2, postureAt(1.0, 1.0f));
+  b.push(3, postureAt(2.0, 4.0f));
+  b.push(4, postureAt(3.0, 9.0f));
   Posture p, q;
   const double h = 1e-3;
   ASSERT_TRUE(b.sample(1.0 - h, p));
@@ -79,10 +80,10 @@ TEST(JitterBuffer, InterpolatesAlongACubicThroughTheNeighbours) {
   EXPECT_NEAR(p.root_translation.x, 4.0f, 1e-5f);
 
   JitterBuffer still(8);
-  still.push(1, at(1.0, 0.0f, 0.0f));
-  still.push(2, at(1.0, 1.0f, 0.5f));
-  still.push(3, at(1.0, 2.0f, 1.0f));
-  still.push(4, at(2.0, 3.0f, 1.5f));
+  still.push(1, postureAt(1.0, 0.0f, 0.0f));
+  still.push(2, postureAt(1.0, 1.0f, 0.5f));
+  still.push(3, postureAt(1.0, 2.0f, 1.0f));
+  still.push(4, postureAt(2.0, 3.0f, 1.5f));
   for (const double t : {0.5, 1.0, 1.5, 2.0}) {
     ASSERT_TRUE(still.sample(t, p));
     EXPECT_TRUE(std::isfinite(p.root_translation.x)) << t;

@@ -17,7 +17,7 @@ namespace {
 
 using test::SimNetwork;
 
-PropSample at(double t, float y, float vy = 0.0f) {
+PropSample sampleAt(double t, float y, float vy = 0.0f) {
   return PropSample{t, glm::vec3(0.0f, y, 0.0f), glm::vec3(0.0f, vy, 0.0f)};
 }
 
@@ -25,9 +25,9 @@ TEST(PropTrack, InterpolatesHoldsAndRefusesDuplicates) {
   PropTrack track(4);
   PropSample s;
   EXPECT_FALSE(track.sample(0.0, s));
-  EXPECT_EQ(track.push(2, at(0.2, 2.0f, -1.0f)), PropTrack::Push::kAccepted);
-  EXPECT_EQ(track.push(1, at(0.1, 1.0f, 1.0f)), PropTrack::Push::kAccepted);  // reordered
-  EXPECT_EQ(track.push(2, at(0.2, 2.0f)), PropTrack::Push::kDuplicate);
+  EXPECT_EQ(track.push(2, sampleAt(0.2, 2.0f, -1.0f)), PropTrack::Push::kAccepted);
+  EXPECT_EQ(track.push(1, sampleAt(0.1, 1.0f, 1.0f)), PropTrack::Push::kAccepted);  // reordered
+  EXPECT_EQ(track.push(2, sampleAt(0.2, 2.0f)), PropTrack::Push::kDuplicate);
   ASSERT_TRUE(track.sample(0.15, s));
   EXPECT_FLOAT_EQ(s.position.y, 1.5f);
   EXPECT_FLOAT_EQ(s.velocity.y, 0.0f);
@@ -37,9 +37,9 @@ TEST(PropTrack, InterpolatesHoldsAndRefusesDuplicates) {
   ASSERT_TRUE(track.sample(9.0, s));
   EXPECT_FLOAT_EQ(s.position.y, 2.0f);
   // Full: the oldest goes; something older than everything is stale.
-  for (std::uint32_t t = 3; t <= 5; ++t) track.push(t, at(0.1 * t, static_cast<float>(t)));
+  for (std::uint32_t t = 3; t <= 5; ++t) track.push(t, sampleAt(0.1 * t, static_cast<float>(t)));
   EXPECT_EQ(track.size(), 4);
-  EXPECT_EQ(track.push(0, at(0.0, 0.0f)), PropTrack::Push::kStale);
+  EXPECT_EQ(track.push(0, sampleAt(0.0, 0.0f)), PropTrack::Push::kStale);
   EXPECT_FLOAT_EQ(track.newest().position.y, 5.0f);
 }
 

@@ -6,14 +6,11 @@
 #include <gtest/gtest.h>
 
 #include "common/sensors/cyberglove_protocol.hpp"
+#include "common/sensors/io/byte_transport.hpp"
 #include "common/sensors/random.hpp"
 
 namespace vistel {
 namespace {
-
-std::span<const std::uint8_t> asBytes(std::string_view s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
-}
 
 GloveRecord sample(int n, std::uint64_t seed) {
   SimRandom rng(seed);
@@ -65,9 +62,9 @@ TEST(CyberGloveParser, EveryFormatSplitAtEveryByte) {
       CyberGloveParser parser(f);
       std::vector<GloveRecord> got;
       GloveRecord r;
-      parser.feed(asBytes(std::string_view(bytes).substr(0, cut)));
+      parser.feed(bytesOf(std::string_view(bytes).substr(0, cut)));
       while (parser.next(r)) got.push_back(r);
-      parser.feed(asBytes(std::string_view(bytes).substr(cut)));
+      parser.feed(bytesOf(std::string_view(bytes).substr(cut)));
       while (parser.next(r)) got.push_back(r);
       ASSERT_EQ(got.size(), records.size()) << "cut " << cut;
       for (std::size_t i = 0; i < got.size(); ++i) expectSame(records[i], got[i], f);
@@ -112,7 +109,7 @@ TEST(CyberGloveParser, ErrorsGarbageAndBadReads) {
   std::vector<GloveRecord> got;
   GloveRecord r;
   for (char ch : s) {  // one byte at a time
-    parser.feed(asBytes(std::string_view(&ch, 1)));
+    parser.feed(bytesOf(std::string_view(&ch, 1)));
     while (parser.next(r)) got.push_back(r);
   }
   ASSERT_EQ(got.size(), 6u);
@@ -137,7 +134,7 @@ TEST(CyberGloveParser, RandomGarbageNeverCrashes) {
     chunk.clear();
     const int n = static_cast<int>(rng.next() % 64);
     for (int i = 0; i < n; ++i) chunk.push_back(static_cast<char>(rng.next() & 0xFF));
-    parser.feed(asBytes(chunk));
+    parser.feed(bytesOf(chunk));
     while (parser.next(r)) {
       if (r.kind == GloveRecord::Kind::kSample) {
         for (int i = 0; i < r.sensor_count; ++i) EXPECT_NE(r.raw[static_cast<std::size_t>(i)], 0);

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "common/sensors/fastrak_parser.hpp"
+#include "common/sensors/io/byte_transport.hpp"
 #include "common/sensors/random.hpp"
 
 namespace vistel {
@@ -47,10 +48,6 @@ std::string encodeAll(const std::vector<FastrakRecord>& records, const FastrakFo
   std::string bytes;
   for (const FastrakRecord& r : records) encodeFastrakRecord(r, format, bytes);
   return bytes;
-}
-
-std::span<const std::uint8_t> asBytes(std::string_view s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
 }
 
 // Tolerances: ASCII has 2 decimals of the unit for positions, 4 for quaternions and
@@ -134,7 +131,7 @@ TEST(FastrakParser, DecodesEveryFormatWhole) {
     const std::string bytes = encodeAll(records, format);
     ASSERT_EQ(bytes.size(), records.size() * fastrakRecordSize(format));
     FastrakParser parser(format);
-    parser.feed(asBytes(bytes));
+    parser.feed(bytesOf(bytes));
     FastrakRecord got;
     for (const FastrakRecord& want : records) {
       ASSERT_TRUE(parser.next(got));
@@ -155,10 +152,10 @@ TEST(FastrakParser, SplitAtEveryByteAndOneByteAtATime) {
       FastrakParser parser(format);
       std::vector<FastrakRecord> got;
       FastrakRecord r;
-      parser.feed(asBytes(std::string_view(bytes).substr(0, cut)));
+      parser.feed(bytesOf(std::string_view(bytes).substr(0, cut)));
       while (parser.next(r)) got.push_back(r);
       EXPECT_EQ(got.size(), cut / fastrakRecordSize(format));  // every complete prefix record
-      parser.feed(asBytes(std::string_view(bytes).substr(cut)));
+      parser.feed(bytesOf(std::string_view(bytes).substr(cut)));
       while (parser.next(r)) got.push_back(r);
       ASSERT_EQ(got.size(), records.size()) << "cut at " << cut;
       for (std::size_t i = 0; i < got.size(); ++i) expectSame(records[i], got[i], format);
@@ -167,7 +164,7 @@ TEST(FastrakParser, SplitAtEveryByteAndOneByteAtATime) {
     std::size_t n = 0;
     FastrakRecord r;
     for (char ch : bytes) {
-      parser.feed(asBytes(std::string_view(&ch, 1)));
+      parser.feed(bytesOf(std::string_view(&ch, 1)));
       while (parser.next(r)) ++n;
     }
     EXPECT_EQ(n, records.size());
@@ -208,7 +205,7 @@ TEST(FastrakParser, ResynchronisesAfterGarbage) {
     // Feed in uneven chunks.
     for (std::size_t pos = 0; pos < stream.size();) {
       const std::size_t n = std::min<std::size_t>(stream.size() - pos, 1 + rng.next() % 40);
-      parser.feed(asBytes(std::string_view(stream).substr(pos, n)));
+      parser.feed(bytesOf(std::string_view(stream).substr(pos, n)));
       pos += n;
       while (parser.next(r)) got.push_back(r);
     }
@@ -228,7 +225,7 @@ TEST(FastrakParser, RejectsImplausibleRecords) {
   encodeFastrakRecord(r, format, good);
   const auto decode = [&](const std::string& s) {
     FastrakRecord out;
-    return decodeFastrakRecord(asBytes(s), format, out);
+    return decodeFastrakRecord(bytesOf(s), format, out);
   };
   EXPECT_TRUE(decode(good));
   std::string bad = good;
@@ -264,7 +261,7 @@ TEST(FastrakParser, AsciiSampleLineFromTheJavaDriver) {
   const std::string line = "01F   0.89   0.04   1.82  -70.55  41.83 -23.48\r\n";
   ASSERT_EQ(line.size(), 48u);
   FastrakRecord r;
-  ASSERT_TRUE(decodeFastrakRecord(asBytes(line), format, r));
+  ASSERT_TRUE(decodeFastrakRecord(bytesOf(line), format, r));
   EXPECT_EQ(r.station, 1);
   EXPECT_EQ(r.status, 'F');
   EXPECT_NEAR(r.position.x, 0.89f * 0.0254f, 1e-6f);

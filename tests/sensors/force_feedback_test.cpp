@@ -14,6 +14,7 @@
 
 #include "common/sensors/io/force_feedback.hpp"
 #include "common/sensors/sensor_config.hpp"
+#include "tests/sensors/setup_errors.hpp"
 
 namespace vistel {
 namespace {
@@ -113,39 +114,37 @@ TEST(ForceFeedbackConfig, SectionParses) {
   EXPECT_EQ(example->force_feedback.channels[2].component, ForceComponent::kZ);
 }
 
-void expectError(const std::string& toml, const std::string& fragment) {
-  Result<SensorSetup> r = parseSensorSetup(toml, "bad.toml");
-  ASSERT_FALSE(r.ok()) << toml;
-  EXPECT_NE(r.error().message.find("bad.toml"), std::string::npos) << r.error().message;
-  EXPECT_NE(r.error().message.find(fragment), std::string::npos) << r.error().message;
-}
-
 TEST(ForceFeedbackConfig, MistakesNameFileAndKey) {
   const std::string head = "[force_feedback]\nreport_size = 8\n";
   const std::string channel = "[[force_feedback.channel]]\npart = \"head\"\n";
-  expectError(head, "force_feedback.channel: no channels");
-  expectError(head + channel + "offset = 7\ntype = \"i16\"\n",
-              "force_feedback.channel[0].offset: 7 + 2 bytes reaches past the 8-byte report");
-  expectError(head + channel + "offset = 5\ntype = \"f32\"\n",
-              "force_feedback.channel[0].offset: 5 + 4 bytes reaches past");
-  expectError(head + channel + "offset = 0\n", "force_feedback.channel[0].offset: 0 is outside");
-  expectError(head + channel + "offset = 1\ntype = \"i16\"\n" + channel + "offset = 2\n",
-              "force_feedback.channel[1].offset: byte 2 is already taken by channel[0]");
-  expectError(head + "[[force_feedback.channel]]\noffset = 1\n",
-              "force_feedback.channel[0].part: missing");
-  expectError(head + channel, "force_feedback.channel[0].offset: missing");
-  expectError(head + channel + "offset = 1\naxis = \"w\"\n",
-              "force_feedback.channel[0].axis: expected one of 'x', 'y', 'z', 'magnitude'");
-  expectError(head + channel + "offset = 1\ntype = \"u32\"\n", "force_feedback.channel[0].type");
-  expectError(head + channel + "offset = 1\nscale = 0\n", "force_feedback.channel[0].scale");
-  expectError(head + channel + "offset = 1\ngain = 2\n",
-              "force_feedback.channel[0]: unknown key 'gain'");
-  expectError("[force_feedback]\nreport_size = 1\n" + channel + "offset = 1\n",
-              "force_feedback.report_size: 1 is outside");
-  expectError("[force_feedback]\nrate = 3\n" + channel + "offset = 1\n",
-              "force_feedback: unknown key 'rate'");
-  expectError("[force_feedback]\nreport_id = 300\n" + channel + "offset = 1\n",
-              "force_feedback.report_id");
+  test::expectSetupError(head, "force_feedback.channel: no channels");
+  test::expectSetupError(
+      head + channel + "offset = 7\ntype = \"i16\"\n",
+      "force_feedback.channel[0].offset: 7 + 2 bytes reaches past the 8-byte report");
+  test::expectSetupError(head + channel + "offset = 5\ntype = \"f32\"\n",
+                         "force_feedback.channel[0].offset: 5 + 4 bytes reaches past");
+  test::expectSetupError(head + channel + "offset = 0\n",
+                         "force_feedback.channel[0].offset: 0 is outside");
+  test::expectSetupError(head + channel + "offset = 1\ntype = \"i16\"\n" + channel + "offset = 2\n",
+                         "force_feedback.channel[1].offset: byte 2 is already taken by channel[0]");
+  test::expectSetupError(head + "[[force_feedback.channel]]\noffset = 1\n",
+                         "force_feedback.channel[0].part: missing");
+  test::expectSetupError(head + channel, "force_feedback.channel[0].offset: missing");
+  test::expectSetupError(
+      head + channel + "offset = 1\naxis = \"w\"\n",
+      "force_feedback.channel[0].axis: expected one of 'x', 'y', 'z', 'magnitude'");
+  test::expectSetupError(head + channel + "offset = 1\ntype = \"u32\"\n",
+                         "force_feedback.channel[0].type");
+  test::expectSetupError(head + channel + "offset = 1\nscale = 0\n",
+                         "force_feedback.channel[0].scale");
+  test::expectSetupError(head + channel + "offset = 1\ngain = 2\n",
+                         "force_feedback.channel[0]: unknown key 'gain'");
+  test::expectSetupError("[force_feedback]\nreport_size = 1\n" + channel + "offset = 1\n",
+                         "force_feedback.report_size: 1 is outside");
+  test::expectSetupError("[force_feedback]\nrate = 3\n" + channel + "offset = 1\n",
+                         "force_feedback: unknown key 'rate'");
+  test::expectSetupError("[force_feedback]\nreport_id = 300\n" + channel + "offset = 1\n",
+                         "force_feedback.report_id");
 }
 
 TEST(ForceFeedbackReport, EncodesEachTypeAndAxis) {

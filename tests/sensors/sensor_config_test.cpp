@@ -4,6 +4,7 @@
 
 #include "common/base/embedded.hpp"
 #include "common/sensors/sensor_config.hpp"
+#include "tests/sensors/setup_errors.hpp"
 
 namespace vistel {
 namespace {
@@ -70,13 +71,6 @@ TEST(SensorConfig, ShippedFilesParse) {
   EXPECT_TRUE(glove->stream);
 }
 
-void expectError(const std::string& toml, const std::string& fragment) {
-  auto r = parseSensorSetup(toml, "bad.toml");
-  ASSERT_FALSE(r.ok()) << toml;
-  EXPECT_NE(r.error().message.find("bad.toml"), std::string::npos) << r.error().message;
-  EXPECT_NE(r.error().message.find(fragment), std::string::npos) << r.error().message;
-}
-
 const char* kStations = R"(
 [[station]]
 number = 1
@@ -93,35 +87,38 @@ site = "right_wrist"
 )";
 
 TEST(SensorConfig, MistakesNameTheKeyAndTheReason) {
-  expectError("[tracker]\nport = 3\n", "tracker.port: expected a string");
-  expectError("[tracker]\nbaud = 0\n", "tracker.baud");
-  expectError("[tracker]\nencoding = \"hex\"\n", "expected one of 'binary', 'ascii'");
-  expectError(std::string("[tracker]\noutput_list = [2, 7]\n") + kStations, "item code 7");
-  expectError(std::string("[tracker]\noutput_list = [0, 1]\n") + kStations,
-              "no position or orientation");
-  expectError("[tracker]\nprot = \"/dev/ttyS0\"\n", "unknown key 'prot'");
-  expectError("[tracker]\nkind = \"fastrak\"\n[[station]]\nnumber = 1\nsite = \"head\"\n",
-              "no station is worn at 'chest'");
-  expectError(
+  test::expectSetupError("[tracker]\nport = 3\n", "tracker.port: expected a string");
+  test::expectSetupError("[tracker]\nbaud = 0\n", "tracker.baud");
+  test::expectSetupError("[tracker]\nencoding = \"hex\"\n", "expected one of 'binary', 'ascii'");
+  test::expectSetupError(std::string("[tracker]\noutput_list = [2, 7]\n") + kStations,
+                         "item code 7");
+  test::expectSetupError(std::string("[tracker]\noutput_list = [0, 1]\n") + kStations,
+                         "no position or orientation");
+  test::expectSetupError("[tracker]\nprot = \"/dev/ttyS0\"\n", "unknown key 'prot'");
+  test::expectSetupError(
+      "[tracker]\nkind = \"fastrak\"\n[[station]]\nnumber = 1\nsite = \"head\"\n",
+      "no station is worn at 'chest'");
+  test::expectSetupError(
       "[[station]]\nnumber = 1\nsite = \"head\"\n[[station]]\nnumber = 2\nsite = \"head\"\n",
       "listed twice");
-  expectError("[[station]]\nnumber = 9\nsite = \"head\"\n", "station.number");
-  expectError("[solver]\nstance = \"lying\"\n", "solver.stance");
-  expectError("[solver]\npelvis_tilt_share = 2\n", "outside [0, 1]");
-  expectError("[[glove]]\nconfig = \"config/sensors/none.toml\"\n", "none.toml");
-  expectError("[hid]\nreport_size = 8\n[[hid.station]]\nsite = \"head\"\nposition_offset = 4\n",
-              "reach past the 8-byte report");
-  expectError("participant = \n", "bad.toml:1");
+  test::expectSetupError("[[station]]\nnumber = 9\nsite = \"head\"\n", "station.number");
+  test::expectSetupError("[solver]\nstance = \"lying\"\n", "solver.stance");
+  test::expectSetupError("[solver]\npelvis_tilt_share = 2\n", "outside [0, 1]");
+  test::expectSetupError("[[glove]]\nconfig = \"config/sensors/none.toml\"\n", "none.toml");
+  test::expectSetupError(
+      "[hid]\nreport_size = 8\n[[hid.station]]\nsite = \"head\"\nposition_offset = 4\n",
+      "reach past the 8-byte report");
+  test::expectSetupError("participant = \n", "bad.toml:1");
   // Foot stations: optional, but a FASTRAK has four receivers, and a HID tracker still needs
   // the four upper-body sites.
-  expectError(std::string("[tracker]\nkind = \"fastrak\"\n") + kStations +
-                  "[[station]]\nnumber = 0\nsite = \"left_foot\"\n",
-              "a FASTRAK has 4 receivers");
-  expectError(
+  test::expectSetupError(std::string("[tracker]\nkind = \"fastrak\"\n") + kStations +
+                             "[[station]]\nnumber = 0\nsite = \"left_foot\"\n",
+                         "a FASTRAK has 4 receivers");
+  test::expectSetupError(
       "[tracker]\nkind = \"hid\"\n[[hid.station]]\nsite = \"head\"\n[[hid.station]]\n"
       "site = \"left_foot\"\n",
       "0 stations laid out at 'chest'");
-  expectError("[[station]]\nnumber = 0\nsite = \"left_ankle\"\n", "station.site");
+  test::expectSetupError("[[station]]\nnumber = 0\nsite = \"left_ankle\"\n", "station.site");
   EXPECT_FALSE(parseGloveConfig("sensors = 20\n", "g.toml").ok());
   EXPECT_FALSE(loadSensorSetup("config/sensors/no-such-file.toml").ok());
 }

@@ -24,6 +24,7 @@
 #include "server/core/server_core.hpp"
 #include "tests/net/sim_network.hpp"
 #include "tests/net/synthetic_avatar.hpp"
+#include "tests/server/seated_room.hpp"
 
 namespace vistel::server {
 namespace {
@@ -31,11 +32,8 @@ namespace {
 using net::SessionState;
 using test::SimNetwork;
 
-// A pair named by ids: ((is_prop, id, prim), (is_prop, id, prim)), ends ordered.
-using End = std::tuple<bool, std::uint32_t, std::uint16_t>;
-using IdPair = std::pair<End, End>;
-
-IdPair ordered(End a, End b) { return a < b ? IdPair{a, b} : IdPair{b, a}; }
+using End = test::PairEnd;
+using test::IdPair;
 
 std::set<IdPair> serverPairs(const RoomWorld& world) {
   std::set<IdPair> out;
@@ -43,7 +41,7 @@ std::set<IdPair> serverPairs(const RoomWorld& world) {
   for (const Interaction& p : world.interactions().pairs) {
     const WorldBody& a = bodies[p.body_a];
     const WorldBody& b = bodies[p.body_b];
-    out.insert(ordered({a.is_prop, a.id, p.prim_a}, {b.is_prop, b.id, p.prim_b}));
+    out.insert(test::orderedPair({a.is_prop, a.id, p.prim_a}, {b.is_prop, b.id, p.prim_b}));
   }
   return out;
 }
@@ -51,7 +49,7 @@ std::set<IdPair> serverPairs(const RoomWorld& world) {
 std::set<IdPair> clientPairs(const net::ClientSession& s) {
   std::set<IdPair> out;
   for (const net::ServerPair& p : s.latestInteractions().pairs) {
-    out.insert(ordered({p.a.is_prop, p.a.id, p.a.prim}, {p.b.is_prop, p.b.id, p.b.prim}));
+    out.insert(test::orderedPair({p.a.is_prop, p.a.id, p.a.prim}, {p.b.is_prop, p.b.id, p.b.prim}));
   }
   return out;
 }
@@ -132,7 +130,8 @@ TEST(CollisionWorld, InteractionsAcrossMembersMatchADirectComputation) {
   std::map<std::uint32_t, std::size_t> self_pairs;
   int across = 0;
   for (const Interaction& p : direct.pairs) {
-    const IdPair pair = ordered({false, ids[p.body_a], p.prim_a}, {false, ids[p.body_b], p.prim_b});
+    const IdPair pair =
+        test::orderedPair({false, ids[p.body_a], p.prim_a}, {false, ids[p.body_b], p.prim_b});
     expected.insert(pair);
     across += p.body_a != p.body_b ? 1 : 0;
     if (p.body_a != p.body_b) expected_across.insert(pair);
@@ -166,8 +165,8 @@ TEST(CollisionWorld, InteractionsAcrossMembersMatchADirectComputation) {
     EXPECT_EQ(dropped, 0);
     std::set<IdPair> mapped_ids;
     for (const Interaction& p : mapped.pairs) {
-      mapped_ids.insert(ordered({false, s.members()[p.body_a]->id, p.prim_a},
-                                {false, s.members()[p.body_b]->id, p.prim_b}));
+      mapped_ids.insert(test::orderedPair({false, s.members()[p.body_a]->id, p.prim_a},
+                                          {false, s.members()[p.body_b]->id, p.prim_b}));
     }
     EXPECT_EQ(mapped_ids, expected) << names[i];
     // A body the caller does not have: its pairs with others are left out (counted), its

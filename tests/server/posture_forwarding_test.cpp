@@ -13,43 +13,22 @@
 #include "common/wire/posture_delta.hpp"
 #include "server/core/room.hpp"
 #include "tests/net/synthetic_avatar.hpp"
-#include "tests/server/sealed_datagrams.hpp"
+#include "tests/server/seated_room.hpp"
 
 namespace vistel::server {
 namespace {
 
-constexpr int kJoints = 5;
-
-std::uint32_t memberId(int i) { return 0x00010000u + static_cast<std::uint32_t>(i); }
-wire::Endpoint endpointOf(int i) {
-  return wire::Endpoint::ipv4(0x7F000001u, static_cast<std::uint16_t>(20000 + i));
-}
-
-// A room of n bound members at the default seats, avatars of kJoints joints.
-void seat(Room& room, int n) {
-  for (int i = 0; i < n; ++i) {
-    RoomCommand c;
-    c.kind = RoomCommand::Kind::kAddMember;
-    c.room = room.id();
-    c.member = MemberId{memberId(i)};
-    test::setTestKeys(c);
-    c.seat = seatPlacement(i, SeatLayout{});
-    c.joint_count = kJoints;
-    room.apply(c, 0.0);
-    c.kind = RoomCommand::Kind::kBindEndpoint;
-    c.endpoint = endpointOf(i);
-    room.apply(c, 0.0);
-  }
-}
+using test::seatedEndpoint;
+using test::seatedMemberId;
 
 std::vector<std::uint8_t> postureFrom(int i, int sequence, double time) {
   wire::PosturePacket p;
-  p.header = {memberId(i), 0};
+  p.header = {seatedMemberId(i), 0};
   EXPECT_TRUE(wire::encodePostureRecord(test::syntheticPosture(time + i),
                                         static_cast<std::uint16_t>(sequence), time, p.record));
   std::vector<std::uint8_t> out;
   wire::write(p, out);
-  return test::sealAs(memberId(i), out);
+  return test::sealAs(seatedMemberId(i), out);
 }
 
 // (recipient index, sender member id) -> entries, over the datagrams in fx; world
@@ -62,8 +41,8 @@ struct Delivered {
 void tally(const Effects& fx, Delivered& d) {
   wire::Snapshot snapshot;
   for (const OutDatagram& out : fx.datagrams) {
-    const int to = out.to.port - 20000;
-    ASSERT_TRUE(wire::readSnapshot(test::openFor(memberId(to), out.bytes), snapshot));
+    const int to = out.to.port - test::kSeatedPortBase;
+    ASSERT_TRUE(wire::readSnapshot(test::openFor(seatedMemberId(to), out.bytes), snapshot));
     if (snapshot.header.part_count > 0) {
       ++d.world_datagrams;
       d.world_entries += static_cast<int>(snapshot.entries.size());
@@ -78,27 +57,27 @@ TEST(PostureForwarding, APostureReachesTheOthersWithinTheIntervalNotAtTheTick) {
   settings.tick_rate_hz = 60.0;
   settings.forward_interval_s = 0.002;
   Room room(RoomId{1}, "fwd", settings, 0.0);
-  seat(room, 4);
+  test::seatMembers(room, 4);
   Effects fx;
 
   // The first posture goes on at once, to the three others.
-  room.onDatagram(postureFrom(0, 1, 0.004), endpointOf(0), 0.004, fx);
+  room.onDatagram(postureFrom(0, 1, 0.004), seatedEndpoint(0), 0.004, fx);
   Delivered d;
   tally(fx, d);
   EXPECT_EQ(fx.datagrams.size(), 3u);
-  for (int to = 1; to < 4; ++to) EXPECT_EQ((d.entries[{to, memberId(0)}]), 1) << to;
-  EXPECT_EQ(d.entries.count({0, memberId(0)}), 0u);  // not back to its sender
+  for (int to = 1; to < 4; ++to) EXPECT_EQ((d.entries[{to, seatedMemberId(0)}]), 1) << to;
+  EXPECT_EQ(d.entries.count({0, seatedMemberId(0)}), 0u);  // not back to its sender
   fx.clear();
 
   // One 1 ms later waits for the batch, due 2 ms after the first: well before the tick.
-  room.onDatagram(postureFrom(1, 1, 0.005), endpointOf(1), 0.005, fx);
+  room.onDatagram(postureFrom(1, 1, 0.005), seatedEndpoint(1), 0.005, fx);
   EXPECT_TRUE(fx.datagrams.empty());
   EXPECT_NEAR(room.nextWakeTime(), 0.006, 1e-9);
   EXPECT_LT(room.nextWakeTime(), room.nextTickTime());
   room.update(0.006, fx);
   d = {};
   tally(fx, d);
-  for (int to : {0, 2, 3}) EXPECT_EQ((d.entries[{to, memberId(1)}]), 1) << to;
+  for (int to : {0, 2, 3}) EXPECT_EQ((d.entries[{to, seatedMemberId(1)}]), 1) << to;
   EXPECT_EQ(d.world_datagrams, 0);
   fx.clear();
 
@@ -117,32 +96,32 @@ TEST(PostureForwarding, SnapshotsAcknowledgeTheUplinkAndAskForAKeyframeAfterALos
   spdlog::set_level(spdlog::level::err);
   RoomSettings settings;
   Room room(RoomId{1}, "ack", settings, 0.0);
-  seat(room, 2);
+  test::seatMembers(room, 2);
   Effects fx;
   wire::PostureDeltaOptions options;
-  options.joint_count = kJoints;
+  options.joint_count = test::kSeatedJoints;
   options.reference = wire::DeltaReference::kPrevious;  // each delta needs the frame before
   wire::PostureDeltaEncoder encoder(options);
   const auto datagramOf = [&](int sequence, double t) {
     std::vector<std::uint8_t> record, out;
     EXPECT_TRUE(encoder.encode(test::syntheticPosture(t), static_cast<std::uint16_t>(sequence), t,
                                false, record));
-    wire::writePostureDatagram({memberId(0), 0}, record, out);
-    return test::sealAs(memberId(0), out);
+    wire::writePostureDatagram({seatedMemberId(0), 0}, record, out);
+    return test::sealAs(seatedMemberId(0), out);
   };
   const auto headerTo = [&](int member) {
     wire::Snapshot snapshot;
     for (const OutDatagram& out : fx.datagrams) {
-      if (out.to == endpointOf(member) &&
-          wire::readSnapshot(test::openFor(memberId(member), out.bytes), snapshot)) {
+      if (out.to == seatedEndpoint(member) &&
+          wire::readSnapshot(test::openFor(seatedMemberId(member), out.bytes), snapshot)) {
         return snapshot.header;
       }
     }
     ADD_FAILURE() << "no snapshot to member " << member;
     return wire::SnapshotHeader{};
   };
-  room.onDatagram(datagramOf(1, 0.001), endpointOf(0), 0.001, fx);  // a keyframe
-  room.onDatagram(datagramOf(2, 0.002), endpointOf(0), 0.002, fx);
+  room.onDatagram(datagramOf(1, 0.001), seatedEndpoint(0), 0.001, fx);  // a keyframe
+  room.onDatagram(datagramOf(2, 0.002), seatedEndpoint(0), 0.002, fx);
   fx.clear();
   room.update(room.nextTickTime(), fx);
   EXPECT_EQ(headerTo(0).ack_flags, wire::kAckValid);
@@ -151,7 +130,7 @@ TEST(PostureForwarding, SnapshotsAcknowledgeTheUplinkAndAskForAKeyframeAfterALos
   // Frame 3 is lost; frame 4 refers to it.
   (void)datagramOf(3, 0.003);
   fx.clear();
-  room.onDatagram(datagramOf(4, 0.004), endpointOf(0), 0.03, fx);
+  room.onDatagram(datagramOf(4, 0.004), seatedEndpoint(0), 0.03, fx);
   EXPECT_EQ(room.posturesWithoutReference(), 1u);
   fx.clear();
   room.update(room.nextTickTime(), fx);
@@ -159,7 +138,7 @@ TEST(PostureForwarding, SnapshotsAcknowledgeTheUplinkAndAskForAKeyframeAfterALos
   EXPECT_EQ(headerTo(0).posture_ack, 2);
   // The keyframe asked for clears the request.
   encoder.requestKeyframe();
-  room.onDatagram(datagramOf(5, 0.005), endpointOf(0), 0.04, fx);
+  room.onDatagram(datagramOf(5, 0.005), seatedEndpoint(0), 0.04, fx);
   fx.clear();
   room.update(room.nextTickTime(), fx);
   EXPECT_EQ(headerTo(0).ack_flags, wire::kAckValid);
@@ -171,7 +150,7 @@ double entriesPerMemberFrame(int members, int frames, Delivered* out = nullptr) 
   RoomSettings settings;
   settings.forward_interval_s = 0.002;
   Room room(RoomId{1}, "crowd", settings, 0.0);
-  seat(room, members);
+  test::seatMembers(room, members);
   Effects fx;
   Delivered d;
   for (int f = 0; f < frames; ++f) {
@@ -179,7 +158,7 @@ double entriesPerMemberFrame(int members, int frames, Delivered* out = nullptr) 
     for (int i = 0; i < members; ++i) {
       // Arrivals spread over the frame, as from unsynchronised senders.
       const double now = t + 0.015 * i / members;
-      room.onDatagram(postureFrom(i, f + 1, now), endpointOf(i), now, fx);
+      room.onDatagram(postureFrom(i, f + 1, now), seatedEndpoint(i), now, fx);
       room.update(now, fx);
       tally(fx, d);
       fx.clear();
@@ -215,8 +194,8 @@ TEST(PostureForwarding, NearMembersAtFullRateFarOnesAtAFractionDownlinkSublinear
     if (at(i) < at(nearest)) nearest = i;
     if (at(i) > at(farthest)) farthest = i;
   }
-  EXPECT_EQ((d.entries[{0, memberId(nearest)}]), kFrames);
-  EXPECT_EQ((d.entries[{0, memberId(farthest)}]), kFrames / 4);
+  EXPECT_EQ((d.entries[{0, seatedMemberId(nearest)}]), kFrames);
+  EXPECT_EQ((d.entries[{0, seatedMemberId(farthest)}]), kFrames / 4);
   // Six times the members, well under three times the downlink.
   std::printf(
       "[ measure  ] entries per member-frame: 16 members 15.0, 50 members %.1f, 100 "

@@ -12,14 +12,13 @@
 #include "server/core/collision_model.hpp"
 #include "server/core/room_world.hpp"
 #include "tests/net/synthetic_avatar.hpp"
+#include "tests/server/seated_room.hpp"
 
 namespace vistel::server {
 namespace {
 
-using End = std::tuple<bool, std::uint32_t, std::uint16_t>;
-using IdPair = std::pair<End, End>;
-
-IdPair ordered(End a, End b) { return a < b ? IdPair{a, b} : IdPair{b, a}; }
+using End = test::PairEnd;
+using test::IdPair;
 
 // 16 members on one spot (every primitive touches every other) and a ball among them.
 void crowd(RoomWorld& world) {
@@ -64,7 +63,7 @@ std::vector<std::set<IdPair>> decodeParts(const RoomWorld& world, bool& truncate
     };
     std::set<IdPair>& pairs = out.emplace_back();
     for (const wire::WirePair& p : x.pairs)
-      pairs.insert(ordered(end(p.body_a, p.prim_a), end(p.body_b, p.prim_b)));
+      pairs.insert(test::orderedPair(end(p.body_a, p.prim_a), end(p.body_b, p.prim_b)));
   }
   return out;
 }
@@ -75,7 +74,7 @@ std::set<IdPair> allPairs(const RoomWorld& world, bool self) {
     if ((p.body_a == p.body_b) != self) continue;
     const WorldBody& a = world.bodies()[p.body_a];
     const WorldBody& b = world.bodies()[p.body_b];
-    out.insert(ordered({a.is_prop, a.id, p.prim_a}, {b.is_prop, b.id, p.prim_b}));
+    out.insert(test::orderedPair({a.is_prop, a.id, p.prim_a}, {b.is_prop, b.id, p.prim_b}));
   }
   return out;
 }

@@ -11,18 +11,16 @@
 #include "server/core/room.hpp"
 #include "tests/net/synthetic_avatar.hpp"
 #include "tests/server/control_frames.hpp"
-#include "tests/server/sealed_datagrams.hpp"
+#include "tests/server/seated_room.hpp"
 
 namespace vistel::server {
 namespace {
 
-wire::Endpoint endpointOf(int i) {
-  return wire::Endpoint::ipv4(0x7F000001u, static_cast<std::uint16_t>(21000 + i));
-}
+using test::seatedEndpoint;
 
 std::vector<std::uint8_t> pingFrom(int i) {
   wire::PingPacket ping;
-  ping.header = {0x00010000u + static_cast<std::uint32_t>(i), 0};
+  ping.header = {test::seatedMemberId(i), 0};
   ping.ping_id = 1;
   ping.client_time = 1.0;
   std::vector<std::uint8_t> out;
@@ -39,32 +37,32 @@ TEST(ServerPause, MembersAreNotDroppedForAPauseOfTheServer) {
     RoomCommand c;
     c.kind = RoomCommand::Kind::kAddMember;
     c.room = RoomId{1};
-    c.member = MemberId{0x00010000u + static_cast<std::uint32_t>(i)};
+    c.member = MemberId{test::seatedMemberId(i)};
     test::setTestKeys(c);
     c.joint_count = 5;
     room.apply(c, 0.0);
     c.kind = RoomCommand::Kind::kBindEndpoint;
-    c.endpoint = endpointOf(i);
+    c.endpoint = seatedEndpoint(i);
     room.apply(c, 0.0);
   }
   Effects fx;
   for (double t = 0.0; t < 1.0; t += 0.05) {
-    for (int i = 0; i < 2; ++i) room.onDatagram(pingFrom(i), endpointOf(i), t, fx);
+    for (int i = 0; i < 2; ++i) room.onDatagram(pingFrom(i), seatedEndpoint(i), t, fx);
     room.update(t, fx);
   }
   // The server stops for 12 s (longer than the 10 s timeout), then runs its timers before
   // it reads what queued.
   room.update(13.0, fx);
   EXPECT_TRUE(fx.timed_out.empty());
-  room.onDatagram(pingFrom(0), endpointOf(0), 13.001, fx);
+  room.onDatagram(pingFrom(0), seatedEndpoint(0), 13.001, fx);
   // Member 0 keeps talking; member 1 stays silent and times out 10 s after the pause.
   for (double t = 13.05; t < 22.9; t += 0.05) {
-    room.onDatagram(pingFrom(0), endpointOf(0), t, fx);
+    room.onDatagram(pingFrom(0), seatedEndpoint(0), t, fx);
     room.update(t, fx);
   }
   EXPECT_TRUE(fx.timed_out.empty());
   for (double t = 22.9; t < 23.5; t += 0.05) {
-    room.onDatagram(pingFrom(0), endpointOf(0), t, fx);
+    room.onDatagram(pingFrom(0), seatedEndpoint(0), t, fx);
     room.update(t, fx);
   }
   ASSERT_EQ(fx.timed_out.size(), 1u);

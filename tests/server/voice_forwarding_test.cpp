@@ -17,52 +17,34 @@
 #include "server/core/room.hpp"
 #include "server/core/server_config.hpp"
 #include "server/core/voice_forwarding.hpp"
-#include "tests/server/sealed_datagrams.hpp"
+#include "tests/server/seated_room.hpp"
 
 namespace vistel::server {
 namespace {
 
-std::uint32_t memberId(int i) { return 0x00010000u + static_cast<std::uint32_t>(i); }
-wire::Endpoint endpointOf(int i) {
-  return wire::Endpoint::ipv4(0x7F000001u, static_cast<std::uint16_t>(21000 + i));
-}
-
-void seat(Room& room, int n) {
-  for (int i = 0; i < n; ++i) {
-    RoomCommand c;
-    c.kind = RoomCommand::Kind::kAddMember;
-    c.room = room.id();
-    c.member = MemberId{memberId(i)};
-    test::setTestKeys(c);
-    c.seat = seatPlacement(i, SeatLayout{});
-    c.joint_count = 5;
-    room.apply(c, 0.0);
-    c.kind = RoomCommand::Kind::kBindEndpoint;
-    c.endpoint = endpointOf(i);
-    room.apply(c, 0.0);
-  }
-}
+using test::seatedEndpoint;
+using test::seatedMemberId;
 
 const std::vector<std::uint8_t> kOpus = {0xF8, 0x01, 0x02, 0x03};
 
 std::vector<std::uint8_t> voiceFrom(int i, std::uint16_t sequence, std::uint8_t level = 20) {
   wire::VoicePacket p;
-  p.header.member_id = memberId(i);
+  p.header.member_id = seatedMemberId(i);
   p.frame.sequence = sequence;
   p.frame.capture_time = 960u * sequence;
   p.frame.level = level;
   p.payload = kOpus;
   std::vector<std::uint8_t> out;
   EXPECT_TRUE(wire::writeVoice(p, out));
-  return test::sealAs(memberId(i), out);
+  return test::sealAs(seatedMemberId(i), out);
 }
 
 // Recipient index -> speaker ids of the VoiceForward datagrams in fx (each checked).
 std::map<int, std::vector<std::uint32_t>> forwards(const Effects& fx) {
   std::map<int, std::vector<std::uint32_t>> out;
   for (const OutDatagram& d : fx.datagrams) {
-    const int to = d.to.port - 21000;
-    const std::vector<std::uint8_t> plain = test::openFor(memberId(to), d.bytes);
+    const int to = d.to.port - test::kSeatedPortBase;
+    const std::vector<std::uint8_t> plain = test::openFor(seatedMemberId(to), d.bytes);
     wire::VoiceForwardPacket f;
     EXPECT_TRUE(wire::readVoiceForward(plain, f)) << "to " << to;
     EXPECT_EQ(std::vector<std::uint8_t>(f.payload.begin(), f.payload.end()), kOpus);
@@ -74,18 +56,19 @@ std::map<int, std::vector<std::uint32_t>> forwards(const Effects& fx) {
 TEST(VoiceForwarding, AFrameReachesTheOthersUnchangedSealedForEach) {
   spdlog::set_level(spdlog::level::err);
   Room room(RoomId{1}, "voice", RoomSettings{}, 0.0);
-  seat(room, 4);
+  test::seatMembers(room, 4);
   Effects fx;
-  room.onDatagram(voiceFrom(0, 7), endpointOf(0), 0.01, fx);
+  room.onDatagram(voiceFrom(0, 7), seatedEndpoint(0), 0.01, fx);
   const auto got = forwards(fx);
   EXPECT_EQ(got.size(), 3u);
   EXPECT_EQ(got.count(0), 0u);  // never back to the speaker
-  for (int to = 1; to < 4; ++to) EXPECT_EQ(got.at(to), std::vector<std::uint32_t>{memberId(0)});
+  for (int to = 1; to < 4; ++to)
+    EXPECT_EQ(got.at(to), std::vector<std::uint32_t>{seatedMemberId(0)});
   EXPECT_EQ(room.voiceStats().frames, 1u);
   EXPECT_EQ(room.voiceStats().forwarded, 3u);
   // Sequence, capture time and level as sent.
   wire::VoiceForwardPacket f;
-  const auto plain = test::openFor(memberId(1), fx.datagrams[0].bytes);
+  const auto plain = test::openFor(seatedMemberId(1), fx.datagrams[0].bytes);
   ASSERT_TRUE(wire::readVoiceForward(plain, f));
   EXPECT_EQ(f.frame.sequence, 7);
   EXPECT_EQ(f.frame.capture_time, 960u * 7);
@@ -106,11 +89,11 @@ TEST(VoiceForwarding, OnlyListenersWithinTheHearingRadius) {
   RoomSettings settings;
   settings.voice.hearing_radius_m = 2.0f;
   Room room(RoomId{1}, "voice", settings, 0.0);
-  seat(room, 4);
+  test::seatMembers(room, 4);
   Effects fx;
   room.update(1.0 / 60.0 + 1e-6, fx);  // a tick places every head
   fx.clear();
-  room.onDatagram(voiceFrom(0, 1), endpointOf(0), 0.02, fx);
+  room.onDatagram(voiceFrom(0, 1), seatedEndpoint(0), 0.02, fx);
   const auto got = forwards(fx);
   EXPECT_EQ(got.size(), 1u);
   EXPECT_EQ(got.count(3), 1u);
@@ -162,12 +145,12 @@ TEST(VoiceForwarding, AtMostMaxSpeakersPerListenerAndTheLoudestTakesOverAfterThe
 TEST(VoiceForwarding, AFloodIsRateLimitedPerSpeaker) {
   spdlog::set_level(spdlog::level::err);
   Room room(RoomId{1}, "voice", RoomSettings{}, 0.0);
-  seat(room, 2);
+  test::seatMembers(room, 2);
   Effects fx;
   int forwarded = 0;
   for (int k = 0; k < 200; ++k) {  // 200 frames in 0.2 s: 1000/s
     fx.clear();
-    room.onDatagram(voiceFrom(0, static_cast<std::uint16_t>(k)), endpointOf(0), 0.001 * k, fx);
+    room.onDatagram(voiceFrom(0, static_cast<std::uint16_t>(k)), seatedEndpoint(0), 0.001 * k, fx);
     forwarded += static_cast<int>(fx.datagrams.size());
   }
   // The burst (20) and 60/s for 0.2 s (12): about 32 pass.
@@ -180,23 +163,23 @@ TEST(VoiceForwarding, AFloodIsRateLimitedPerSpeaker) {
 TEST(VoiceForwarding, MalformedForgedAndDisabledVoiceIsDropped) {
   spdlog::set_level(spdlog::level::err);
   Room room(RoomId{1}, "voice", RoomSettings{}, 0.0);
-  seat(room, 2);
+  test::seatMembers(room, 2);
   Effects fx;
   // An empty payload, sealed properly.
   std::vector<std::uint8_t> plain;
   wire::VoicePacket p;
-  p.header.member_id = memberId(0);
+  p.header.member_id = seatedMemberId(0);
   p.payload = kOpus;
   ASSERT_TRUE(wire::writeVoice(p, plain));
   plain.resize(wire::kVoiceHeaderBytes);
-  room.onDatagram(test::sealAs(memberId(0), plain), endpointOf(0), 0.01, fx);
+  room.onDatagram(test::sealAs(seatedMemberId(0), plain), seatedEndpoint(0), 0.01, fx);
   EXPECT_EQ(room.drops().counts().at("malformed voice"), 1u);
   // Sealed with another member's key: the tag does not verify.
   std::vector<std::uint8_t> forged;
   ASSERT_TRUE(wire::writeVoice(p, forged));
-  room.onDatagram(test::sealAs(memberId(1), forged), endpointOf(0), 0.02, fx);
+  room.onDatagram(test::sealAs(seatedMemberId(1), forged), seatedEndpoint(0), 0.02, fx);
   // From the wrong address.
-  room.onDatagram(voiceFrom(0, 1), endpointOf(1), 0.03, fx);
+  room.onDatagram(voiceFrom(0, 1), seatedEndpoint(1), 0.03, fx);
   EXPECT_EQ(room.drops().counts().at("wrong endpoint"), 1u);
   EXPECT_TRUE(fx.datagrams.empty());
   EXPECT_EQ(room.drops().total(), 3u);
@@ -204,8 +187,8 @@ TEST(VoiceForwarding, MalformedForgedAndDisabledVoiceIsDropped) {
   RoomSettings off;
   off.voice.enabled = false;
   Room quiet(RoomId{2}, "quiet", off, 0.0);
-  seat(quiet, 2);
-  quiet.onDatagram(voiceFrom(0, 1), endpointOf(0), 0.01, fx);
+  test::seatMembers(quiet, 2);
+  quiet.onDatagram(voiceFrom(0, 1), seatedEndpoint(0), 0.01, fx);
   EXPECT_TRUE(fx.datagrams.empty());
   EXPECT_EQ(quiet.drops().counts().at("voice disabled"), 1u);
 }

@@ -22,16 +22,7 @@
 namespace vistel {
 namespace {
 
-const char* kMakeHuman = "avatars/makehuman_game_engine.glb";
 const char* kClip = "mocap/cmu/01_01.bvh";
-
-void expectFailure(const test::ToolRun& run, std::string_view fragment) {
-  EXPECT_NE(run.exit_code, 0) << run.out;
-  EXPECT_GT(run.exit_code, 0);
-  EXPECT_LT(run.exit_code, 128) << "crashed: " << run.err;
-  EXPECT_NE(run.err.find(fragment), std::string::npos)
-      << "expected '" << fragment << "' in: " << run.err;
-}
 
 std::vector<std::uint8_t> bytesOf(const std::string& path) {
   Result<std::vector<std::uint8_t>> bytes = readFileBytes(path, 1u << 30);
@@ -51,7 +42,7 @@ std::string defaultAvatar() {
 }
 
 // The vertices of animation frame f of an exported .glb: base POSITION + morph target f.
-struct Glb {
+struct ExportedGlb {
   nlohmann::json doc;
   std::vector<std::uint8_t> bytes;
   std::span<const std::uint8_t> bin;
@@ -82,8 +73,8 @@ struct Glb {
   }
 };
 
-Glb readGlb(const std::string& path) {
-  Glb g;
+ExportedGlb readExportedGlb(const std::string& path) {
+  ExportedGlb g;
   g.bytes = bytesOf(path);
   Result<GlbChunks> chunks = parseGlbContainer(g.bytes, path);
   EXPECT_TRUE(chunks.ok()) << (chunks.ok() ? "" : chunks.error().message);
@@ -161,11 +152,11 @@ TEST(DeformCli, BuildTheDefaultAvatarAndLoadItBackBitIdentical) {
   bytes[bytes.size() / 2] ^= 0x5a;
   ASSERT_TRUE(writeFileBytes(dir + "/damaged.vavatar", bytes).ok());
   run = test::runTool("info " + dir + "/damaged.vavatar", dir);
-  expectFailure(run, "damaged.vavatar");
+  test::expectToolFailure(run, "damaged.vavatar");
 }
 
 TEST(DeformCli, BuildTheSharedGlb) {
-  VISTEL_REQUIRE_SHARED(glb, kMakeHuman);
+  VISTEL_REQUIRE_SHARED(glb, test::kMakeHumanGlb);
   const std::string dir = test::scratchDir();
   const std::string out = dir + "/mh.vavatar";
   const test::ToolRun run = test::runTool(
@@ -180,7 +171,7 @@ TEST(DeformCli, BuildTheSharedGlb) {
 }
 
 TEST(DeformCli, DeformClipFramesWithABall) {
-  VISTEL_REQUIRE_SHARED(glb, kMakeHuman);
+  VISTEL_REQUIRE_SHARED(glb, test::kMakeHumanGlb);
   VISTEL_REQUIRE_SHARED(clip, kClip);
   const std::string dir = test::scratchDir();
   const std::string avatar = dir + "/mh.vavatar";
@@ -231,8 +222,8 @@ TEST(DeformCli, DeformClipFramesWithABall) {
   ASSERT_GE(contact_frames, 3);
 
   // Both files hold the same frames; they differ where the ball touches.
-  const Glb deformed = readGlb(dir + "/deformed.glb");
-  const Glb rigid = readGlb(dir + "/rigid.glb");
+  const ExportedGlb deformed = readExportedGlb(dir + "/deformed.glb");
+  const ExportedGlb rigid = readExportedGlb(dir + "/rigid.glb");
   ASSERT_EQ(deformed.frameCount(), 6u);
   ASSERT_EQ(rigid.frameCount(), 6u);
   const std::vector<glm::vec3> d = deformed.frame(contact_index);
@@ -270,46 +261,50 @@ TEST(DeformCli, DeformAnAvatarWithoutAModelBuildsItOnTheFly) {
   EXPECT_NE(run.out.find("3 frames"), std::string::npos) << run.out;
   std::string header;
   EXPECT_EQ(readCsv(dir + "/rest.csv", header).size(), 6u);
-  EXPECT_EQ(readGlb(dir + "/rest.glb").frameCount(), 3u);
+  EXPECT_EQ(readExportedGlb(dir + "/rest.glb").frameCount(), 3u);
 }
 
 TEST(DeformCli, BadArgumentsFailCleanly) {
   const std::string dir = test::scratchDir();
   const std::string a = defaultAvatar();
   const std::string out = " --out " + dir + "/x.glb";
-  expectFailure(test::runTool("deform " + a + out, dir), "--bvh");
-  expectFailure(test::runTool("deform " + a + " --rest --frames 5:2" + out, dir), "--frames 5:2");
-  expectFailure(test::runTool("deform " + a + " --rest --frames x:3" + out, dir), "A:B");
-  expectFailure(test::runTool("deform " + a + " --rest --frames 0:99999" + out, dir),
-                "at most 4096");
-  expectFailure(test::runTool("deform " + a + " --rest --ball 1,2,3" + out, dir), "3 numbers");
-  expectFailure(test::runTool("deform " + a + " --rest --ball 1,2,3,-1" + out, dir), "radius");
-  expectFailure(test::runTool("deform " + a + " --rest --ball 1,2,nan,0.1" + out, dir),
-                "not a finite number");
-  expectFailure(test::runTool("deform " + a + " --rest --ball 1,2,3,0.1,4" + out, dir),
-                "5 numbers");
-  expectFailure(test::runTool("deform " + a + " --rest --ball-physics" + out, dir), "needs --ball");
-  expectFailure(
+  test::expectToolFailure(test::runTool("deform " + a + out, dir), "--bvh");
+  test::expectToolFailure(test::runTool("deform " + a + " --rest --frames 5:2" + out, dir),
+                          "--frames 5:2");
+  test::expectToolFailure(test::runTool("deform " + a + " --rest --frames x:3" + out, dir), "A:B");
+  test::expectToolFailure(test::runTool("deform " + a + " --rest --frames 0:99999" + out, dir),
+                          "at most 4096");
+  test::expectToolFailure(test::runTool("deform " + a + " --rest --ball 1,2,3" + out, dir),
+                          "3 numbers");
+  test::expectToolFailure(test::runTool("deform " + a + " --rest --ball 1,2,3,-1" + out, dir),
+                          "radius");
+  test::expectToolFailure(test::runTool("deform " + a + " --rest --ball 1,2,nan,0.1" + out, dir),
+                          "not a finite number");
+  test::expectToolFailure(test::runTool("deform " + a + " --rest --ball 1,2,3,0.1,4" + out, dir),
+                          "5 numbers");
+  test::expectToolFailure(test::runTool("deform " + a + " --rest --ball-physics" + out, dir),
+                          "needs --ball");
+  test::expectToolFailure(
       test::runTool("deform " + a + " --rest --ball-stiffness soft --ball 0,0,0,0.1" + out, dir),
       "--ball-stiffness");
-  expectFailure(test::runTool("deform " + dir + "/missing.vavatar --rest" + out, dir),
-                "missing.vavatar: no such file");
-  expectFailure(test::runTool("deform " + a + " --bvh " + dir + "/missing.bvh" + out, dir),
-                "missing.bvh");
-  expectFailure(test::runTool("deform " + a + " --rest --out " + dir + "/no/such/dir/x.glb", dir),
-                "x.glb");
-  expectFailure(test::runTool("build " + a + " -o " + dir + "/x.glb", dir), ".vavatar");
-  expectFailure(test::runTool("build " + dir + "/missing.glb -o " + dir + "/x.vavatar", dir),
-                "no such file");
-  expectFailure(
+  test::expectToolFailure(test::runTool("deform " + dir + "/missing.vavatar --rest" + out, dir),
+                          "missing.vavatar: no such file");
+  test::expectToolFailure(
+      test::runTool("deform " + a + " --bvh " + dir + "/missing.bvh" + out, dir), "missing.bvh");
+  test::expectToolFailure(
+      test::runTool("deform " + a + " --rest --out " + dir + "/no/such/dir/x.glb", dir), "x.glb");
+  test::expectToolFailure(test::runTool("build " + a + " -o " + dir + "/x.glb", dir), ".vavatar");
+  test::expectToolFailure(
+      test::runTool("build " + dir + "/missing.glb -o " + dir + "/x.vavatar", dir), "no such file");
+  test::expectToolFailure(
       test::runTool(
           "build " + a + " -o " + dir + "/x.vavatar --primitives " + dir + "/missing.toml", dir),
       "missing.toml");
   if (std::filesystem::exists(test::sharedDataPath(kClip))) {
-    expectFailure(test::runTool("deform " + a + " --bvh " + test::sharedDataPath(kClip) +
-                                    " --frames 0:100000" + out,
-                                dir),
-                  "has frames 0..");
+    test::expectToolFailure(test::runTool("deform " + a + " --bvh " + test::sharedDataPath(kClip) +
+                                              " --frames 0:100000" + out,
+                                          dir),
+                            "has frames 0..");
   }
   EXPECT_FALSE(std::filesystem::exists(dir + "/x.glb"));
   EXPECT_FALSE(std::filesystem::exists(dir + "/x.vavatar"));

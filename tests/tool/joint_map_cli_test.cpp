@@ -21,8 +21,6 @@
 namespace vistel {
 namespace {
 
-const char* kAvatar = "avatars/makehuman_game_engine.glb";
-
 std::uint32_t readU32(const std::vector<std::uint8_t>& b, std::size_t at) {
   std::uint32_t v = 0;
   std::memcpy(&v, b.data() + at, 4);
@@ -104,7 +102,7 @@ std::map<std::string, std::string> makehumanToCanonical() {
 }
 
 TEST(VistelAvatarJointMap, InfoPrintsTheInferredMapForMixamoAndMadeUpNames) {
-  VISTEL_REQUIRE_SHARED(avatar, kAvatar);
+  VISTEL_REQUIRE_SHARED(avatar, test::kMakeHumanGlb);
   const std::string dir = test::scratchDir();
   const std::map<std::string, std::string> canonical = makehumanToCanonical();
   ASSERT_EQ(canonical.size(), 52u);
@@ -160,7 +158,7 @@ TEST(VistelAvatarJointMap, InfoPrintsTheInferredMapForMixamoAndMadeUpNames) {
 }
 
 TEST(VistelAvatarJointMap, NoNeckRigByTopologyBuildsWithoutTheNeckPrimitive) {
-  VISTEL_REQUIRE_SHARED(avatar, kAvatar);
+  VISTEL_REQUIRE_SHARED(avatar, test::kMakeHumanGlb);
   const std::string dir = test::scratchDir();
   // The head moved from neck_01 to spine_03 (rest transforms are translations only, so its
   // translation gains the neck's), neck_01 left as a short leaf; then made-up names.
@@ -219,7 +217,7 @@ TEST(VistelAvatarJointMap, InfoOnANonHumanoidSaysWhyThereIsNoMap) {
 }
 
 TEST(VistelAvatarJointMap, CmuClipRetargetsOntoMixamoNamedAvatarAsOntoTheOriginal) {
-  VISTEL_REQUIRE_SHARED(avatar, kAvatar);
+  VISTEL_REQUIRE_SHARED(avatar, test::kMakeHumanGlb);
   VISTEL_REQUIRE_SHARED(clip, "mocap/cmu/131_01.bvh");
   const std::string dir = test::scratchDir();
   const std::map<std::string, std::string> canonical = makehumanToCanonical();

@@ -7,6 +7,8 @@
 #include <fstream>
 #include <sstream>
 
+#include <gtest/gtest.h>
+
 #include "tests/support/test_support.hpp"
 
 namespace vistel::test {
@@ -57,6 +59,15 @@ std::optional<nlohmann::json> validateGltf(const std::string& path, std::string&
     return std::nullopt;
   }
   return verdict;
+}
+
+void expectToolFailure(const ToolRun& run, std::string_view fragment) {
+  EXPECT_NE(run.exit_code, 0) << run.out;
+  EXPECT_GT(run.exit_code, 0);
+  EXPECT_LT(run.exit_code, 128) << "crashed: " << run.err;
+  EXPECT_FALSE(run.err.empty());
+  EXPECT_NE(run.err.find(fragment), std::string::npos)
+      << "expected '" << fragment << "' in: " << run.err;
 }
 
 }  // namespace vistel::test

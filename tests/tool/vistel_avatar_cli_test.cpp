@@ -14,17 +14,6 @@
 namespace vistel {
 namespace {
 
-const char* kAvatar = "avatars/makehuman_game_engine.glb";
-
-// A failed run: non-zero exit, not a crash, a message on stderr containing `fragment`.
-void expectFailure(const test::ToolRun& run, std::string_view fragment = "") {
-  EXPECT_NE(run.exit_code, 0) << run.out;
-  EXPECT_GT(run.exit_code, 0);
-  EXPECT_LT(run.exit_code, 128) << "crashed: " << run.err;
-  EXPECT_FALSE(run.err.empty());
-  EXPECT_NE(run.err.find(fragment), std::string::npos) << run.err;
-}
-
 std::string chainGlb(const std::string& dir) {
   const std::string path = dir + "/chain.glb";
   const std::vector<std::uint8_t> bytes = test::makeChainGltf().file.glb();
@@ -35,7 +24,7 @@ std::string chainGlb(const std::string& dir) {
 }
 
 TEST(VistelAvatarCli, InfoOnTheSharedAvatar) {
-  VISTEL_REQUIRE_SHARED(avatar, kAvatar);
+  VISTEL_REQUIRE_SHARED(avatar, test::kMakeHumanGlb);
   const std::string dir = test::scratchDir();
   const test::ToolRun text = test::runTool("info " + avatar, dir);
   ASSERT_EQ(text.exit_code, 0) << text.err;
@@ -77,7 +66,7 @@ TEST(VistelAvatarCli, InfoOnGltfAndVavatarFiles) {
 }
 
 TEST(VistelAvatarCli, PoseRestRoundTripsThroughReimport) {
-  VISTEL_REQUIRE_SHARED(avatar_path, kAvatar);
+  VISTEL_REQUIRE_SHARED(avatar_path, test::kMakeHumanGlb);
   const std::string dir = test::scratchDir();
   const test::ToolRun run =
       test::runTool("pose " + avatar_path + " --rest --out " + dir + "/rest.glb", dir);
@@ -95,7 +84,7 @@ TEST(VistelAvatarCli, PoseRestRoundTripsThroughReimport) {
 }
 
 TEST(VistelAvatarCli, PoseBvhFrameWithLbsAndDqs) {
-  VISTEL_REQUIRE_SHARED(avatar_path, kAvatar);
+  VISTEL_REQUIRE_SHARED(avatar_path, test::kMakeHumanGlb);
   VISTEL_REQUIRE_SHARED(clip, "mocap/cmu/01_01.bvh");
   const std::string dir = test::scratchDir();
   Result<AvatarModel> original = importGltfAvatar(avatar_path);
@@ -163,65 +152,69 @@ TEST(VistelAvatarCli, DefaultAvatar) {
 TEST(VistelAvatarCli, BadCommandLines) {
   const std::string dir = test::scratchDir();
   const std::string chain = chainGlb(dir);
-  expectFailure(test::runTool("", dir));
-  expectFailure(test::runTool("frobnicate", dir));
-  expectFailure(test::runTool("info", dir), "file");
-  expectFailure(test::runTool("info --json", dir));
-  expectFailure(test::runTool("pose " + chain + " --rest", dir), "--out");
-  expectFailure(test::runTool("pose " + chain + " --out " + dir + "/x.glb", dir),
-                "--rest or --bvh");
-  expectFailure(test::runTool(
+  test::expectToolFailure(test::runTool("", dir));
+  test::expectToolFailure(test::runTool("frobnicate", dir));
+  test::expectToolFailure(test::runTool("info", dir), "file");
+  test::expectToolFailure(test::runTool("info --json", dir));
+  test::expectToolFailure(test::runTool("pose " + chain + " --rest", dir), "--out");
+  test::expectToolFailure(test::runTool("pose " + chain + " --out " + dir + "/x.glb", dir),
+                          "--rest or --bvh");
+  test::expectToolFailure(test::runTool(
       "pose " + chain + " --rest --bvh a.bvh --frame 1 --out " + dir + "/x.glb", dir));
-  expectFailure(test::runTool("pose " + chain + " --bvh a.bvh --out " + dir + "/x.glb", dir));
-  expectFailure(
+  test::expectToolFailure(
+      test::runTool("pose " + chain + " --bvh a.bvh --out " + dir + "/x.glb", dir));
+  test::expectToolFailure(
       test::runTool("pose " + chain + " --rest --skinning foo --out " + dir + "/x.glb", dir),
       "foo");
-  expectFailure(test::runTool("pose " + chain + " --rest --frame x --out " + dir + "/x.glb", dir));
-  expectFailure(test::runTool("default", dir), "--out");
-  expectFailure(test::runTool("default --out " + dir + "/x.txt", dir),
-                "must end in .glb or .vavatar");
+  test::expectToolFailure(
+      test::runTool("pose " + chain + " --rest --frame x --out " + dir + "/x.glb", dir));
+  test::expectToolFailure(test::runTool("default", dir), "--out");
+  test::expectToolFailure(test::runTool("default --out " + dir + "/x.txt", dir),
+                          "must end in .glb or .vavatar");
   EXPECT_FALSE(std::filesystem::exists(dir + "/x.glb"));
 }
 
 TEST(VistelAvatarCli, BadFiles) {
   const std::string dir = test::scratchDir();
   const std::string chain = chainGlb(dir);
-  expectFailure(test::runTool("info " + dir + "/missing.glb", dir), "missing.glb: no such file");
-  expectFailure(test::runTool("info " + dir, dir), "folder");
+  test::expectToolFailure(test::runTool("info " + dir + "/missing.glb", dir),
+                          "missing.glb: no such file");
+  test::expectToolFailure(test::runTool("info " + dir, dir), "folder");
 
   std::ofstream(dir + "/garbage.glb") << "hello, this is not a model";
-  expectFailure(test::runTool("info " + dir + "/garbage.glb", dir), "garbage.glb: not a glTF file");
+  test::expectToolFailure(test::runTool("info " + dir + "/garbage.glb", dir),
+                          "garbage.glb: not a glTF file");
 
   std::vector<std::uint8_t> bytes = test::makeChainGltf().file.glb();
   std::ofstream(dir + "/cut.glb", std::ios::binary)
       .write(reinterpret_cast<const char*>(bytes.data()), 300);
-  expectFailure(test::runTool("info " + dir + "/cut.glb", dir), "cut.glb: byte 8");
+  test::expectToolFailure(test::runTool("info " + dir + "/cut.glb", dir), "cut.glb: byte 8");
 
   std::ofstream(dir + "/bad.vavatar") << "VAVATAR garbage";
-  expectFailure(test::runTool("info " + dir + "/bad.vavatar", dir), "bad.vavatar");
+  test::expectToolFailure(test::runTool("info " + dir + "/bad.vavatar", dir), "bad.vavatar");
 
-  expectFailure(test::runTool("pose " + chain + " --bvh " + dir + "/missing.bvh --frame 0 --out " +
-                                  dir + "/x.glb",
-                              dir),
-                "missing.bvh");
+  test::expectToolFailure(test::runTool("pose " + chain + " --bvh " + dir +
+                                            "/missing.bvh --frame 0 --out " + dir + "/x.glb",
+                                        dir),
+                          "missing.bvh");
   std::ofstream(dir + "/bad.bvh") << "HIERARCHY\nROOT hips\n{\n";
-  expectFailure(
+  test::expectToolFailure(
       test::runTool(
           "pose " + chain + " --bvh " + dir + "/bad.bvh --frame 0 --out " + dir + "/x.glb", dir),
       "bad.bvh");
-  expectFailure(
+  test::expectToolFailure(
       test::runTool("pose " + chain + " --rest --out " + dir + "/no/such/dir/x.glb", dir));
 }
 
 TEST(VistelAvatarCli, FrameOutOfRange) {
-  VISTEL_REQUIRE_SHARED(avatar_path, kAvatar);
+  VISTEL_REQUIRE_SHARED(avatar_path, test::kMakeHumanGlb);
   VISTEL_REQUIRE_SHARED(clip, "mocap/cmu/01_01.bvh");
   const std::string dir = test::scratchDir();
-  expectFailure(test::runTool("pose " + avatar_path + " --bvh " + clip + " --frame 999999 --out " +
-                                  dir + "/x.glb",
-                              dir),
-                "frame 999999 out of range");
-  expectFailure(test::runTool(
+  test::expectToolFailure(test::runTool("pose " + avatar_path + " --bvh " + clip +
+                                            " --frame 999999 --out " + dir + "/x.glb",
+                                        dir),
+                          "frame 999999 out of range");
+  test::expectToolFailure(test::runTool(
       "pose " + avatar_path + " --bvh " + clip + " --frame -3 --out " + dir + "/x.glb", dir));
 }
 

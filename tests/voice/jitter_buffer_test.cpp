@@ -14,7 +14,7 @@
 namespace vistel {
 namespace {
 
-constexpr int64_t kFrame = kVoiceFrameSamples;
+constexpr int64_t kBufferFrame = kVoiceFrameSamples;
 const uint8_t kPayload[1] = {0x42};
 
 struct Arrival {
@@ -45,15 +45,15 @@ RunResult run(VoiceJitterBuffer& buffer, double seconds, double jitter_s, double
     const uint16_t s = sequence++;
     const double jitter = unit(rng) * jitter_s * kVoiceSampleRate;
     if (unit(rng) < loss) continue;
-    arrivals.push_back({static_cast<double>((k + 1) * kFrame) * scale + jitter, s,
-                        static_cast<uint32_t>(k * kFrame)});
+    arrivals.push_back({static_cast<double>((k + 1) * kBufferFrame) * scale + jitter, s,
+                        static_cast<uint32_t>(k * kBufferFrame)});
   }
   std::stable_sort(arrivals.begin(), arrivals.end(),
                    [](const Arrival& a, const Arrival& b) { return a.time < b.time; });
   RunResult result;
   size_t next = 0;
-  const double end = static_cast<double>(frames * kFrame) * scale + (jitter_s + 0.5) * 48000;
-  for (int64_t now = 500; static_cast<double>(now) < end; now += kFrame) {
+  const double end = static_cast<double>(frames * kBufferFrame) * scale + (jitter_s + 0.5) * 48000;
+  for (int64_t now = 500; static_cast<double>(now) < end; now += kBufferFrame) {
     for (; next < arrivals.size() && arrivals[next].time <= static_cast<double>(now); ++next) {
       buffer.push({arrivals[next].sequence, arrivals[next].capture, kPayload},
                   static_cast<int64_t>(arrivals[next].time));
@@ -129,11 +129,12 @@ TEST(JitterBuffer, ReorderedPacketsPlayInSequence) {
   const int order[10] = {1, 0, 3, 2, 5, 4, 7, 6, 9, 8};
   for (int i = 0; i < 10; ++i) {
     const int k = order[i];
-    ASSERT_TRUE(buffer.push({static_cast<uint16_t>(k), static_cast<uint32_t>(k * kFrame), kPayload},
-                            (k + 1) * kFrame + 100));
+    ASSERT_TRUE(
+        buffer.push({static_cast<uint16_t>(k), static_cast<uint32_t>(k * kBufferFrame), kPayload},
+                    (k + 1) * kBufferFrame + 100));
   }
   std::vector<int64_t> played;
-  for (int64_t now = 2 * kFrame; now < 20 * kFrame; now += kFrame) {
+  for (int64_t now = 2 * kBufferFrame; now < 20 * kBufferFrame; now += kBufferFrame) {
     const auto d = buffer.pull(now);
     if (d.kind == PlayoutKind::kDecode) played.push_back(d.sequence);
   }
@@ -145,19 +146,21 @@ TEST(JitterBuffer, ReorderedPacketsPlayInSequence) {
 TEST(JitterBuffer, LateAndDuplicatePacketsAreDropped) {
   VoiceJitterBuffer buffer;
   for (int k = 0; k < 5; ++k) {
-    ASSERT_TRUE(buffer.push({static_cast<uint16_t>(k), static_cast<uint32_t>(k * kFrame), kPayload},
-                            (k + 1) * kFrame));
+    ASSERT_TRUE(
+        buffer.push({static_cast<uint16_t>(k), static_cast<uint32_t>(k * kBufferFrame), kPayload},
+                    (k + 1) * kBufferFrame));
   }
-  ASSERT_TRUE(buffer.push({3, 3 * kFrame, kPayload}, 4 * kFrame + 10));
+  ASSERT_TRUE(buffer.push({3, 3 * kBufferFrame, kPayload}, 4 * kBufferFrame + 10));
   EXPECT_EQ(buffer.stats().duplicate, 1);
   // Play a few frames, then offer frame 1 again (late).
-  for (int64_t now = kFrame + 300; now < 5 * kFrame; now += kFrame) (void)buffer.pull(now);
-  ASSERT_TRUE(buffer.push({1, 1 * kFrame, kPayload}, 5 * kFrame));
+  for (int64_t now = kBufferFrame + 300; now < 5 * kBufferFrame; now += kBufferFrame)
+    (void)buffer.pull(now);
+  ASSERT_TRUE(buffer.push({1, 1 * kBufferFrame, kPayload}, 5 * kBufferFrame));
   EXPECT_EQ(buffer.stats().late, 1);
   // Empty and oversized payloads are refused.
-  EXPECT_FALSE(buffer.push({6, 6 * kFrame, {}}, 6 * kFrame));
+  EXPECT_FALSE(buffer.push({6, 6 * kBufferFrame, {}}, 6 * kBufferFrame));
   const std::vector<uint8_t> huge(kVoiceMaxPacketBytes + 1, 0);
-  EXPECT_FALSE(buffer.push({6, 6 * kFrame, huge}, 6 * kFrame));
+  EXPECT_FALSE(buffer.push({6, 6 * kBufferFrame, huge}, 6 * kBufferFrame));
   EXPECT_EQ(buffer.stats().invalid, 2);
 }
 
@@ -167,12 +170,13 @@ TEST(JitterBuffer, AMissingFrameUsesFecFromTheNextElseConcealment) {
   for (int k = 0; k < 10; ++k) {
     if (k == 3 || k == 6 || k == 7) continue;
     const uint8_t payload[1] = {static_cast<uint8_t>(k)};
-    ASSERT_TRUE(buffer.push({static_cast<uint16_t>(k), static_cast<uint32_t>(k * kFrame), payload},
-                            (k + 1) * kFrame));
+    ASSERT_TRUE(
+        buffer.push({static_cast<uint16_t>(k), static_cast<uint32_t>(k * kBufferFrame), payload},
+                    (k + 1) * kBufferFrame));
   }
   std::vector<PlayoutDecision> decisions;
   std::vector<uint8_t> first_byte;
-  for (int64_t now = kFrame + 300; now < 12 * kFrame; now += kFrame) {
+  for (int64_t now = kBufferFrame + 300; now < 12 * kBufferFrame; now += kBufferFrame) {
     const auto d = buffer.pull(now);
     if (d.sequence >= 0) {
       decisions.push_back(d);
@@ -208,11 +212,11 @@ TEST(JitterBuffer, TalkspurtsRealignInSilenceAndSequencesWrap) {
   VoiceJitterBuffer wrap;
   for (int k = 0; k < 6; ++k) {
     const uint16_t sequence = static_cast<uint16_t>(65533 + k);
-    ASSERT_TRUE(
-        wrap.push({sequence, static_cast<uint32_t>(k * kFrame), kPayload}, (k + 1) * kFrame));
+    ASSERT_TRUE(wrap.push({sequence, static_cast<uint32_t>(k * kBufferFrame), kPayload},
+                          (k + 1) * kBufferFrame));
   }
   int decoded = 0;
-  for (int64_t now = kFrame + 300; now < 10 * kFrame; now += kFrame) {
+  for (int64_t now = kBufferFrame + 300; now < 10 * kBufferFrame; now += kBufferFrame) {
     decoded += wrap.pull(now).kind == PlayoutKind::kDecode ? 1 : 0;
   }
   EXPECT_EQ(decoded, 6);
@@ -226,11 +230,11 @@ TEST(JitterBuffer, AForwardingGapEndsTheTalkspurtInsteadOfConcealingIt) {
   std::vector<int64_t> offsets;  // pull - capture of each decoded frame
   int concealed_run = 0, longest_concealed_run = 0;
   for (int64_t tick = 0; tick < 100; ++tick) {
-    const int64_t now = tick * kFrame + 300;
+    const int64_t now = tick * kBufferFrame + 300;
     const int64_t k = tick - 1;  // the frame that has just arrived
     if (k >= 0 && (k < 20 || (k >= 70 && k < 90))) {
       ASSERT_TRUE(buffer.push(
-          {static_cast<uint16_t>(k), static_cast<uint32_t>(k * kFrame), kPayload}, now - 10));
+          {static_cast<uint16_t>(k), static_cast<uint32_t>(k * kBufferFrame), kPayload}, now - 10));
     }
     const auto d = buffer.pull(now);
     concealed_run = d.kind == PlayoutKind::kConceal ? concealed_run + 1 : 0;

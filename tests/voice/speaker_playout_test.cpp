@@ -12,7 +12,7 @@
 namespace vistel {
 namespace {
 
-constexpr int64_t kFrame = kVoiceFrameSamples;
+constexpr int64_t kPlayoutFrame = kVoiceFrameSamples;
 
 TEST(SpeakerPlayout, SendAndReceivePerFrameAllocateNothingOnceWarm) {
   const auto speech = synthesizeSpeech(2.0, {.pauses = false});
@@ -29,7 +29,7 @@ TEST(SpeakerPlayout, SendAndReceivePerFrameAllocateNothingOnceWarm) {
 
   auto tick = [&](int64_t k) {
     // Send: capture, VAD, encode.
-    std::copy_n(speech.begin() + (k % 90) * kFrame, kFrame, frame.begin());
+    std::copy_n(speech.begin() + (k % 90) * kPlayoutFrame, kPlayoutFrame, frame.begin());
     (void)vad->process(frame);
     auto size = encoder->encode(frame, packet);
     // Receive: every speaker's packet, then the playout tick and the mix.
@@ -37,10 +37,11 @@ TEST(SpeakerPlayout, SendAndReceivePerFrameAllocateNothingOnceWarm) {
     mixer.beginBlock();
     for (int s = 0; s < 16; ++s) {
       if (k % 10 != 3) {  // every 10th packet lost
-        speakers[s].push({static_cast<uint16_t>(k), static_cast<uint32_t>(k * kFrame), bytes},
-                         (k + 1) * kFrame);
+        speakers[s].push(
+            {static_cast<uint16_t>(k), static_cast<uint32_t>(k * kPlayoutFrame), bytes},
+            (k + 1) * kPlayoutFrame);
       }
-      speakers[s].pull((k + 1) * kFrame + 300, mono);
+      speakers[s].pull((k + 1) * kPlayoutFrame + 300, mono);
       mixer.addSpeaker(HeadPose{}, {0.3f * s - 2.0f, 0.0f, 1.5f}, mono, states[s]);
     }
     mixer.finishBlock(out);
@@ -63,14 +64,15 @@ TEST(SpeakerPlayout, ACorruptPacketIsConcealedAndCounted) {
   int decoded = 0;
   for (int64_t k = 0; k < 20; ++k) {
     auto size = encoder->encode(
-        std::span<const float>(speech.data() + k * kFrame, kVoiceFrameSamples), packet);
+        std::span<const float>(speech.data() + k * kPlayoutFrame, kVoiceFrameSamples), packet);
     ASSERT_TRUE(size.ok());
     // Frame 5 arrives as a 10 ms CELT packet: valid Opus, wrong for this pipeline.
     std::vector<uint8_t> bytes(packet.begin(), packet.begin() + static_cast<long>(*size));
     if (k == 5) bytes = {static_cast<uint8_t>(16u << 3), 0x00, 0x00};
-    ASSERT_TRUE(playout->push({static_cast<uint16_t>(k), static_cast<uint32_t>(k * kFrame), bytes},
-                              (k + 1) * kFrame));
-    const auto decision = playout->pull((k + 1) * kFrame + 300, out);
+    ASSERT_TRUE(
+        playout->push({static_cast<uint16_t>(k), static_cast<uint32_t>(k * kPlayoutFrame), bytes},
+                      (k + 1) * kPlayoutFrame));
+    const auto decision = playout->pull((k + 1) * kPlayoutFrame + 300, out);
     decoded += decision.kind == PlayoutKind::kDecode ? 1 : 0;
     for (float x : out) ASSERT_TRUE(std::isfinite(x));
   }

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
 
 namespace vistel {
 
@@ -31,5 +32,10 @@ class ByteTransport {
   virtual void discardInput() = 0;
   virtual std::string describe() const = 0;
 };
+
+// A command string as the bytes write() takes.
+inline std::span<const std::uint8_t> bytesOf(std::string_view s) {
+  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
+}
 
 }  // namespace vistel

@@ -3,14 +3,6 @@
 #include <algorithm>
 
 namespace vistel {
-namespace {
-
-std::span<const std::uint8_t> bytesOf(std::string_view s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
-}
-
-}  // namespace
-
 CyberGloveSource::CyberGloveSource(std::unique_ptr<ByteTransport> transport,
                                    const GloveDeviceConfig& config, SourceClock clock)
     : transport_(std::move(transport)),

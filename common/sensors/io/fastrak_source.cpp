@@ -4,14 +4,6 @@
 #include <thread>
 
 namespace vistel {
-namespace {
-
-std::span<const std::uint8_t> bytesOf(std::string_view s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
-}
-
-}  // namespace
-
 SourceClock steadySeconds() {
   const auto start = std::chrono::steady_clock::now();
   return [start]() {

@@ -52,7 +52,7 @@ bool baudConstant(int baud, speed_t& out) {
   }
 }
 
-int timeoutMs(double timeout_s) {
+int pollTimeoutMs(double timeout_s) {
   if (!(timeout_s > 0.0)) return 0;
   return static_cast<int>(std::ceil(std::min(timeout_s, 3600.0) * 1000.0));
 }
@@ -93,7 +93,7 @@ SerialTransport::~SerialTransport() {
 IoResult SerialTransport::read(std::span<std::uint8_t> buffer, double timeout_s) {
   pollfd p{fd_, POLLIN, 0};
   for (;;) {
-    const int r = ::poll(&p, 1, timeoutMs(timeout_s));
+    const int r = ::poll(&p, 1, pollTimeoutMs(timeout_s));
     if (r < 0) {
       if (errno == EINTR) continue;
       return {IoStatus::kFailed, 0,
@@ -125,7 +125,7 @@ IoResult SerialTransport::write(std::span<const std::uint8_t> bytes, double time
     if (n < 0 && errno == EINTR) continue;
     if (n < 0 && errno == EAGAIN) {
       pollfd p{fd_, POLLOUT, 0};
-      const int r = ::poll(&p, 1, timeoutMs(timeout_s));
+      const int r = ::poll(&p, 1, pollTimeoutMs(timeout_s));
       if (r == 0) return {IoStatus::kTimeout, done, fmt::format("{}: write timed out", path_)};
       if (r > 0 && (p.revents & POLLOUT) != 0) continue;
       if (r > 0 && (p.revents & (POLLHUP | POLLERR)) != 0) {

@@ -9,7 +9,7 @@
 namespace vistel {
 namespace {
 
-unsigned timeoutMs(double timeout_s) {
+unsigned usbTimeoutMs(double timeout_s) {
   if (!(timeout_s > 0.0)) return 1;  // libusb: 0 would mean "wait forever"
   return static_cast<unsigned>(std::ceil(std::min(timeout_s, 3600.0) * 1000.0));
 }
@@ -92,7 +92,7 @@ IoResult UsbTransport::read(std::span<std::uint8_t> buffer, double timeout_s) {
     std::string error;
     const UsbStatus s =
         device_->bulkTransfer(config_.endpoint_in, packet_.data(), static_cast<int>(packet_.size()),
-                              got, timeoutMs(timeout_s), error);
+                              got, usbTimeoutMs(timeout_s), error);
     got = std::clamp(got, 0, static_cast<int>(packet_.size()));
     packet_start_ = 0;
     packet_end_ = static_cast<std::size_t>(got);
@@ -119,8 +119,9 @@ IoResult UsbTransport::write(std::span<const std::uint8_t> bytes, double timeout
     std::memcpy(chunk.data(), bytes.data() + done, n);
     int sent = 0;
     std::string error;
-    const UsbStatus s = device_->bulkTransfer(
-        config_.endpoint_out, chunk.data(), static_cast<int>(n), sent, timeoutMs(timeout_s), error);
+    const UsbStatus s =
+        device_->bulkTransfer(config_.endpoint_out, chunk.data(), static_cast<int>(n), sent,
+                              usbTimeoutMs(timeout_s), error);
     done += static_cast<std::size_t>(std::clamp(sent, 0, static_cast<int>(n)));
     if (s == UsbStatus::kNoDevice) {
       gone_ = true;
