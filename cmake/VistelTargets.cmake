@@ -3,9 +3,10 @@
 # Warnings as errors on our own targets only (third-party headers come in as SYSTEM).
 function(vistel_warnings target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow -Werror)
-  if(VISTEL_UNITY_BUILD)
+  if(VISTEL_UNITY_BUILD AND CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
     # A unity batch #includes our .cpp files, so GCC takes a class that holds a file-local
-    # type for one declared in a header and warns; in a .cpp that is by design.
+    # type for one declared in a header and warns; in a .cpp that is by design. (Clang has
+    # no such warning, and refuses the option.)
     target_compile_options(${target} PRIVATE -Wno-subobject-linkage)
   endif()
   target_compile_definitions(${target} PUBLIC GLM_ENABLE_EXPERIMENTAL)

@@ -15,12 +15,11 @@
 #include "server/http/prometheus.hpp"
 
 namespace vistel::server {
+namespace {
 
 using tcp = asio::ip::tcp;
 using Strand = asio::strand<asio::io_context::executor_type>;
 using Clock = std::chrono::steady_clock;
-
-namespace {
 
 constexpr auto kAcceptBackoff = std::chrono::milliseconds(100);
 constexpr auto kLingerTimeout = std::chrono::seconds(1);
