@@ -3,6 +3,7 @@
 #include <algorithm>
 
 namespace vistel {
+
 CyberGloveSource::CyberGloveSource(std::unique_ptr<ByteTransport> transport,
                                    const GloveDeviceConfig& config, SourceClock clock)
     : transport_(std::move(transport)),

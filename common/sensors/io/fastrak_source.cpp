@@ -4,6 +4,7 @@
 #include <thread>
 
 namespace vistel {
+
 SourceClock steadySeconds() {
   const auto start = std::chrono::steady_clock::now();
   return [start]() {
