@@ -10,7 +10,7 @@
 #include "server/core/collision_model.hpp"
 #include "server/core/room.hpp"
 #include "tests/net/synthetic_avatar.hpp"
-#include "tests/server/sealed_datagrams.hpp"
+#include "tests/server/seated_room.hpp"
 #include "tests/support/alloc_counter.hpp"
 
 namespace vistel::server {
@@ -35,7 +35,7 @@ TEST(RoomTick, AllocatesNothingOnceWarm) {
     RoomCommand c;
     c.kind = RoomCommand::Kind::kAddMember;
     c.room = room_id;
-    c.member = MemberId{0x00010000u + static_cast<std::uint32_t>(i)};
+    c.member = MemberId{test::seatedMemberId(i)};
     test::setTestKeys(c);
     c.seat = seatPlacement(i, SeatLayout{0.3f, 0.3f, 1.0f});
     c.joint_count = 5;
@@ -62,7 +62,7 @@ TEST(RoomTick, AllocatesNothingOnceWarm) {
   for (int i = 0; i < kMembers; ++i) {
     for (int t = 0; t < ticks; ++t) {
       wire::PosturePacket p;
-      p.header = {0x00010000u + static_cast<std::uint32_t>(i), 0};
+      p.header = {test::seatedMemberId(i), 0};
       const double now = (t + 0.5) / 60.0;
       ASSERT_TRUE(wire::encodePostureRecord(test::syntheticPosture(now + i),
                                             static_cast<std::uint16_t>(t + 1), now, p.record));
