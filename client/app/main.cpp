@@ -17,6 +17,9 @@
 // calibrates. Every drawn body whose avatar carries an implicit model (the default avatar,
 // built avatars, balls) is deformed after skinning (client/deform RoomDeformer; Step 1 from
 // the server's snapshots when it fits, [deform] in the config; --rigid-only turns it off).
+// Dents are shared with the other sites (client/deform/dent_sync.hpp): the own avatar's,
+// and a prop's while the own avatar dents it, go to the server, which relays them; the
+// other sites' replace what this one draws of their bodies.
 // Joins room R, streams its own posture (a clip with --source, else the avatar's rest
 // posture), receives everyone's into jitter buffers, and draws the room (RoomView: a
 // window with a display, EGL offscreen without one). --headless draws nothing but
@@ -29,8 +32,9 @@
 // deformed at full rate, at a lower rate, or drawn rigid (the level of detail's tiers),
 // and own_forces: the own avatar's contact force per body part (its implicit primitives;
 // client/deform/own_forces.hpp) — frames in contact, peak and mean per part, the last
-// frame's forces. --forces-out streams those forces as CSV, a row per frame per part in
-// contact (and one when it lets go); a [force_feedback] section in the sensors config
+// frame's forces, and dent_sync: dent records sent and adopted. --forces-out streams those forces
+// as CSV, a row per frame per part in contact (and one when it lets go); a [force_feedback] section
+// in the sensors config
 // (--sensors, or --force-feedback naming a sensors config) sends them to a HID
 // force-feedback device, at most at the frame rate. The stats' "playback" object says
 // how each remote member was shown (client/net/playback_stats.hpp): frames interpolated,
@@ -74,6 +78,7 @@
 
 #include "client/app/sensor_input.hpp"
 #include "client/app/server_interactions.hpp"
+#include "client/deform/dent_sync.hpp"
 #include "client/deform/own_forces.hpp"
 #include "client/deform/room_deformer.hpp"
 #include "client/net/asio.hpp"
@@ -524,6 +529,11 @@ int main(int argc, char** argv) {
         "own contact forces need the deformable component (rendering, [deform] enabled, no "
         "--rigid-only): they stay zero");
   }
+  // Dents shared with the other sites (proto/SESSION.md §2.5).
+  DentSync dent_sync;
+  std::vector<DentBody> dent_props;
+  std::vector<BodyDents> dents_in;
+  double frame_server_now = 0.0;
   FrameFigures figures;
   PlaybackStats playback;  // how each remote member was shown
   // The jitter drawn against sent, for --stats-json only (forward kinematics per member).
@@ -561,6 +571,7 @@ int main(int argc, char** argv) {
     // Copy the roster and postures out under the session lock.
     driver->withSession([&](const ClientSession& s, double now) {
       const double server_now = s.serverTime(now);
+      frame_server_now = server_now;
       const double play_time = server_now - config->interpolation_delay_s;
       members.resize(s.members().size());
       for (std::size_t i = 0; i < members.size(); ++i) {
@@ -695,6 +706,22 @@ int main(int argc, char** argv) {
       }
       view->render(views);
       if (deformer) deformer->finish();
+      // Dents: ours (own avatar, props it dents) out, the other sites' in.
+      if (deformer && self_view) {
+        const DentBody self{false, *self_view, *self_view};
+        dent_props.clear();
+        for (const auto& p : props) dent_props.push_back({true, p.first, propViewId(p.first)});
+        for (const OutgoingDents& o : dent_sync.collect(*deformer, elapsed, self, dent_props)) {
+          driver->sendDents({o.body.prop, o.body.id, 0, frame_server_now, o.record});
+        }
+        driver->takeDents(dents_in);
+        for (const BodyDents& d : dents_in) {
+          const DentBody body{d.prop, d.body_id, d.prop ? propViewId(d.body_id) : d.body_id};
+          if (Status st = dent_sync.receive(*deformer, elapsed, self, body, d.record); !st) {
+            spdlog::warn("{}", st.error().message);
+          }
+        }
+      }
       if (own_forces) {
         if (Status st = own_forces->frame(elapsed, deformer.get(), self_view); !st) {
           spdlog::warn("{}", st.error().message);
@@ -777,7 +804,8 @@ int main(int argc, char** argv) {
   if (!stats_path.empty()) {
     const std::string fields = figures.json() + ",\n  \"playback\": " + playbackJson(playback) +
                                (voice ? ",\n  \"voice\": " + voice->json() : std::string()) +
-                               (own_forces ? ",\n" + own_forces->json() : std::string());
+                               (own_forces ? ",\n" + own_forces->json() : std::string()) +
+                               (deformer ? ",\n" + dent_sync.json() : std::string());
     if (Status st = writeFileText(stats_path, withFields(json, fields)); !st) {
       spdlog::error("{}", st.error().message);
       exit_code = 1;

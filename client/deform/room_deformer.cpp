@@ -200,15 +200,28 @@ Status RoomDeformer::sync(std::span<const MemberView> views, RoomView& view) {
       return st;
     }
   }
+  // Dents waiting for their bodies: applied once the view is a body, dropped once it is not
+  // drawn any more. (A failure is returned after the frame's work.)
+  Status dents_status;
+  std::erase_if(pending_dents_, [&](std::pair<std::uint32_t, DentRecord>& p) {
+    if (const int body = bodyOf(p.first); body >= 0) {
+      if (Status st = applyDents(body, p.second); !st && dents_status) {
+        dents_status = fail("dents for view {:#x}: {}", p.first, st.error().message);
+      }
+      return true;
+    }
+    return std::none_of(views.begin(), views.end(),
+                        [&](const MemberView& v) { return v.id == p.first; });
+  });
   std::optional<DeformScene>& scene = shared_->scene;
-  if (!scene) return {};
+  if (!scene) return dents_status;
   for (std::size_t i = 0; i < views.size(); ++i) {
     const int body = view_body_[i];
     if (body < 0) continue;
     scene->setPosture(body, views[i].posture);
     scene->setPlacement(body, views[i].placement);
   }
-  return {};
+  return dents_status;
 }
 
 Status RoomDeformer::prepare(double time, const InteractionList* received) {
@@ -289,6 +302,55 @@ void RoomDeformer::finish() {
   stats_.held = shared_->held.load(std::memory_order_relaxed);
   stats_.deform_cpu_ms =
       static_cast<double>(shared_->deform_ns.load(std::memory_order_relaxed)) * 1e-6;
+}
+
+bool RoomDeformer::recordDents(std::uint32_t view_id, DentRecord& out) const {
+  const int body = bodyOf(view_id);
+  const DeformState* state = body >= 0 ? shared_->scene->deformState(body) : nullptr;
+  if (state == nullptr) return false;
+  vistel::recordDents(state->memory, out);
+  return true;
+}
+
+Status RoomDeformer::applyDents(int body, const DentRecord& record) {
+  const DeformState* state = shared_->scene->deformState(body);
+  if (state == nullptr) return fail("body {} does not deform", body);
+  dent_memory_.resize(state->memory.size());
+  if (Status st = vistel::applyDents(record, dent_memory_); !st) return st;
+  if (!shared_->scene->adoptMemory(body, dent_memory_)) {
+    return fail("body {} refused the memory", body);  // (sizes checked above)
+  }
+  return {};
+}
+
+Status RoomDeformer::adoptDents(std::uint32_t view_id, const DentRecord& record) {
+  if (Status st = checkDents(record.vertex_count, record.gaps, record.depths, record.gaps.size());
+      !st) {
+    return st;
+  }
+  if (const int body = bodyOf(view_id); body >= 0) return applyDents(body, record);
+  auto it = std::find_if(pending_dents_.begin(), pending_dents_.end(),
+                         [&](const auto& p) { return p.first == view_id; });
+  if (it == pending_dents_.end()) {
+    pending_dents_.emplace_back(view_id, record);
+  } else {
+    it->second = record;
+  }
+  return {};
+}
+
+bool RoomDeformer::touching(std::uint32_t view_a, std::uint32_t view_b) const {
+  const int a = bodyOf(view_a);
+  const int b = bodyOf(view_b);
+  if (a < 0 || b < 0 || a == b) return false;
+  const auto measured = [&](int self, int partner) {
+    const DeformState* state = shared_->scene->deformState(self);
+    if (state == nullptr || !shared_->scene->contactSummary(self).deformed) return false;
+    return std::any_of(state->contacts.begin(), state->contacts.end(), [&](const BodyContact& c) {
+      return c.partner == partner && c.vertices > 0;
+    });
+  };
+  return measured(a, b) || measured(b, a);
 }
 
 std::optional<DeformTier> RoomDeformer::tier(std::uint32_t view_id) const {

@@ -23,6 +23,11 @@
 // needsVertices() == false, or give the offsets through offsetsOnly()). A body that has
 // no offsets yet (it just became kReduced) deforms at once. lastStats() counts them.
 //
+// Dents shared between sites (proto/SESSION.md §2.5; client/deform/dent_sync.hpp decides
+// what to send and what to take): recordDents gives a body's elastic memory as a record,
+// adoptDents replaces a body's memory with another site's (at once, or when the body joins
+// the scene: a record for a view without a body yet waits while the view is drawn).
+//
 // The scene is rebuilt (allocating) only when the set of (view id, avatar) changes: a
 // member joins or leaves, an avatar arrives, a prop appears; other frames allocate
 // nothing once warm. Not thread-safe: one client thread calls prepare/finish. The hooks
@@ -41,6 +46,7 @@
 #include "common/base/result.hpp"
 #include "common/scene/deform_lod.hpp"
 #include "common/scene/deform_scene.hpp"
+#include "common/scene/dent_record.hpp"
 
 namespace vistel {
 
@@ -108,6 +114,20 @@ class RoomDeformer {
   // Scene rebuilds so far.
   int rebuilds() const { return rebuilds_; }
 
+  // A view's body's elastic memory (dents) as a record; false when it is not a body that
+  // deforms. Call between frames (after finish(), before the next sync()).
+  bool recordDents(std::uint32_t view_id, DentRecord& out) const;
+  // Another site's record for a view's body replaces its memory, now when the view is a body
+  // of this scene, else when it becomes one (the newest record per view waits while that view
+  // is drawn). Fails on a malformed record, or one for another vertex count than the body's
+  // skin. Call between frames.
+  Status adoptDents(std::uint32_t view_id, const DentRecord& record);
+  // Records waiting for their views to become bodies.
+  int pendingDents() const { return static_cast<int>(pending_dents_.size()); }
+  // Whether the bodies of two views were in contact this frame (either measured it; valid
+  // after finish()).
+  bool touching(std::uint32_t view_a, std::uint32_t view_b) const;
+
  private:
   class Hook;
   struct Key {
@@ -136,6 +156,8 @@ class RoomDeformer {
   };
 
   Status rebuild(std::span<const MemberView> views, RoomView& view);
+  // Writes a record into a body's memory.
+  Status applyDents(int body, const DentRecord& record);
 
   DeformOptions options_;
   std::shared_ptr<Shared> shared_;
@@ -157,6 +179,9 @@ class RoomDeformer {
   std::vector<DeformTier> tiers_;           // (nbody) this frame
   std::vector<DeformTier> previous_tiers_;  // (nbody) last frame (empty after a rebuild)
   DeformFrameStats stats_;
+  // Dents for views that are not bodies yet (view id, record), and scratch.
+  std::vector<std::pair<std::uint32_t, DentRecord>> pending_dents_;
+  std::vector<float> dent_memory_;
 };
 
 }  // namespace vistel

@@ -36,6 +36,10 @@ std::optional<BallSpec> ballOf(const control::PropInfo& info) {
   return b;
 }
 
+std::span<const std::uint32_t> dentValues(const google::protobuf::RepeatedField<std::uint32_t>& f) {
+  return {f.data(), static_cast<std::size_t>(f.size())};
+}
+
 }  // namespace
 
 const char* sessionStateName(SessionState state) {
@@ -113,6 +117,51 @@ bool ClientSession::requestBall() {
   return true;
 }
 
+bool ClientSession::sendDents(const BodyDents& dents) {
+  if (state_ != SessionState::kLive) return false;
+  const DentRecord& r = dents.record;
+  if (!checkDents(r.vertex_count, r.gaps, r.depths, r.gaps.size()) ||
+      !std::isfinite(dents.server_time)) {
+    return false;
+  }
+  control::ClientMessage msg;
+  control::Dents& d = *msg.mutable_dents();
+  d.set_body_id(dents.body_id);
+  d.set_prop(dents.prop);
+  d.set_vertex_count(r.vertex_count);
+  d.set_server_time(dents.server_time);
+  d.mutable_gaps()->Add(r.gaps.begin(), r.gaps.end());
+  d.mutable_depths()->Add(r.depths.begin(), r.depths.end());
+  sendControl(msg.SerializeAsString());
+  ++stats_.dents_sent;
+  return true;
+}
+
+void ClientSession::handleDents(const control::Dents& dents) {
+  if (Status st =
+          checkDents(dents.vertex_count(), dentValues(dents.gaps()), dentValues(dents.depths()),
+                     static_cast<std::size_t>(dents.gaps_size()));
+      !st || !std::isfinite(dents.server_time())) {
+    ++stats_.dents_rejected;
+    spdlog::warn("server relayed {} {:#x}'s dents from member {:#x}: {}",
+                 dents.prop() ? "prop" : "avatar", dents.body_id(), dents.member(),
+                 st ? std::string("a non-finite time") : st.error().message);
+    return;
+  }
+  ++stats_.dents_received;
+  auto it = std::find_if(received_dents_.begin(), received_dents_.end(), [&](const BodyDents& d) {
+    return d.prop == dents.prop() && d.body_id == dents.body_id();
+  });
+  BodyDents& out = it != received_dents_.end() ? *it : received_dents_.emplace_back();
+  out.prop = dents.prop();
+  out.body_id = dents.body_id();
+  out.member = dents.member();
+  out.server_time = dents.server_time();
+  out.record.vertex_count = dents.vertex_count();
+  out.record.gaps.assign(dents.gaps().begin(), dents.gaps().end());
+  out.record.depths.assign(dents.depths().begin(), dents.depths().end());
+}
+
 void ClientSession::leave(const std::string& reason) {
   if (state_ == SessionState::kClosed) return;
   control::ClientMessage msg;
@@ -178,6 +227,9 @@ void ClientSession::handleMessage(const control::ServerMessage& msg, double now)
     }
     case control::ServerMessage::kRoster:
       handleRoster(msg.roster());
+      return;
+    case control::ServerMessage::kDents:
+      handleDents(msg.dents());
       return;
     case control::ServerMessage::kAvatarChunk:
       handleChunk(msg.avatar_chunk());

@@ -32,6 +32,10 @@
 // within bodies, assembled from its parts), in the server's ids. sceneInteractions()
 // maps that list onto the caller's scene: body i < members().size() is members()[i], body
 // members().size() + k is props()[k] ("scene order"), and validates it.
+//
+// Dents (proto/SESSION.md §2.5): sendDents sends a body's elastic memory (common/scene/
+// dent_record.hpp); what the server relays waits in receivedDents(), the newest per body,
+// until the caller takes it (malformed ones are counted in stats().dents_rejected).
 #pragma once
 
 #include <array>
@@ -53,12 +57,14 @@
 #include "common/base/result.hpp"
 #include "common/deform/interactions.hpp"
 #include "common/deform/prop.hpp"
+#include "common/scene/dent_record.hpp"
 #include "common/wire/datagram_crypto.hpp"
 #include "common/wire/framing.hpp"
 #include "common/wire/packets.hpp"
 #include "common/wire/posture_delta.hpp"
 
 namespace vistel::control {
+class Dents;
 class ServerMessage;
 class Roster;
 class AvatarChunk;
@@ -67,7 +73,7 @@ class Welcome;
 
 namespace vistel::net {
 
-inline constexpr std::uint32_t kProtocolVersion = 4;
+inline constexpr std::uint32_t kProtocolVersion = 5;
 
 struct SessionSettings {
   std::string room;
@@ -170,6 +176,15 @@ struct ReceivedInteractions {
   std::vector<ServerPair> pairs;
 };
 
+// A body's dents as they travel: the sender's own avatar or a prop of the room.
+struct BodyDents {
+  bool prop = false;
+  std::uint32_t body_id = 0;  // member id (its avatar) or prop id
+  std::uint32_t member = 0;   // received: the member that sent it
+  double server_time = 0.0;   // when the sender sampled it (server clock)
+  DentRecord record;
+};
+
 // What the session wants sent; the driver (or test) takes it and clears it.
 struct SessionOutbox {
   std::vector<std::uint8_t> stream;                  // bytes for the TCP stream, in order
@@ -212,6 +227,13 @@ class ClientSession {
   // Asks the server for a ball above our head (SpawnProp over TCP; the server rate-limits
   // and places it). False, nothing sent, before the Welcome or after closing.
   bool requestBall();
+  // Sends a body's dents (Dents over TCP): only in kLive, and only a well-formed record with a
+  // finite time (else false, nothing sent). The server relays it to the room and keeps the newest per
+  // body for later joiners; it ignores one faster than its dents_interval_s per body.
+  bool sendDents(const BodyDents& dents);
+  // Dents received since the caller last took them: the newest per body, in arrival order
+  // of the bodies. Take them by swapping or clearing.
+  std::vector<BodyDents>& receivedDents() { return received_dents_; }
 
   SessionState state() const { return state_; }
   const std::string& error() const { return error_; }
@@ -280,6 +302,7 @@ class ClientSession {
   void handleVoice(std::span<const std::uint8_t> datagram, double now);
   void handleProps(const control::Roster& roster);
   void handleInteractionPart(const wire::Snapshot& snapshot);
+  void handleDents(const control::Dents& dents);
   // Scene index of a server body, or -1.
   int sceneIndex(const ServerBodyPrim& body) const;
   void uploadAvatar(std::size_t chunk_bytes);
@@ -347,6 +370,7 @@ class ClientSession {
   std::vector<std::uint8_t> scratch_record_bytes_;
   VoiceInbox voice_;
   std::uint16_t voice_sequence_ = 0;
+  std::vector<BodyDents> received_dents_;
 };
 
 }  // namespace vistel::net

@@ -385,6 +385,22 @@ bool NetDriver::requestBall() {
   return sent;
 }
 
+bool NetDriver::sendDents(const BodyDents& dents) {
+  bool sent = false;
+  {
+    std::lock_guard lock(mutex_);
+    sent = session_->sendDents(dents);
+  }
+  if (sent) asio::post(strand_, [self = shared_from_this()] { self->flush(); });
+  return sent;
+}
+
+void NetDriver::takeDents(std::vector<BodyDents>& out) {
+  out.clear();
+  std::lock_guard lock(mutex_);
+  std::swap(out, session_->receivedDents());
+}
+
 SessionState NetDriver::state() const {
   std::lock_guard lock(mutex_);
   // A closed session about to be replaced (a rejoin pending) is still joining.

@@ -81,6 +81,10 @@ class NetDriver : public std::enable_shared_from_this<NetDriver> {
   void takeVoice(std::vector<ReceivedVoice>& out, VoiceCounters* counters = nullptr);
   // ClientSession::requestBall (a ball above our head; the server rate-limits).
   bool requestBall();
+  // ClientSession::sendDents; and the dents received since the last call (the newest per
+  // body), swapped into out (whose old contents are dropped).
+  bool sendDents(const BodyDents& dents);
+  void takeDents(std::vector<BodyDents>& out);
   SessionState state() const;
   std::string error() const;
   // Why the last session closed (a refusal's text, a lost connection), kept across the

@@ -69,6 +69,9 @@ std::string statsJson(const SessionStats& stats, int frames_rendered, double clo
   doc["reconnects"] = stats.reconnects;
   doc["udp_rehellos"] = stats.udp_rehellos;
   doc["udp_rebinds"] = stats.udp_rebinds;
+  doc["dents"] = {{"sent", stats.dents_sent},
+                  {"received", stats.dents_received},
+                  {"rejected", stats.dents_rejected}};
   doc["clock"] = {{"offset_s", clock_offset_s}, {"round_trip_ms", clock_round_trip_s * 1e3}};
   return doc.dump(2) + "\n";
 }

@@ -49,15 +49,18 @@ struct SessionStats {
   std::uint64_t datagram_bytes_received = 0;  // UDP payload of every datagram from the server
   std::uint64_t datagrams_rejected = 0;       // malformed or unexpected datagrams from the server
   std::uint64_t reconnects = 0;               // lost sessions resumed (rejoined and live again)
-  std::uint64_t udp_rehellos = 0;  // times the server's datagrams stopped and a hello got
-                                   // an answer again (the UDP path re-verified)
-  std::uint64_t udp_rebinds = 0;   // ... of which the server challenged a new address of ours
+  std::uint64_t udp_rehellos = 0;    // times the server's datagrams stopped and a hello got
+                                     // an answer again (the UDP path re-verified)
+  std::uint64_t udp_rebinds = 0;     // ... of which the server challenged a new address of ours
+  std::uint64_t dents_sent = 0;      // Dents messages sent (own avatar, props it dented)
+  std::uint64_t dents_received = 0;  // ... relayed by the server, well formed
+  std::uint64_t dents_rejected = 0;  // ... malformed (ignored)
 };
 
 // The --stats-json document: {"members": {"<name>": {"postures_received": n,
 // "rate_hz": f}}, "latency_ms": {"mean": f, "p50": f, "p99": f, "samples": n},
 // "frames_rendered": n, "postures_sent": n, ..., "reconnects": n, "udp_rehellos": n,
-// "udp_rebinds": n}.
+// "udp_rebinds": n, "dents": {"sent": n, "received": n, "rejected": n}}.
 std::string statsJson(const SessionStats& stats, int frames_rendered, double clock_offset_s,
                       double clock_round_trip_s);
 

@@ -230,6 +230,23 @@ bool carryDeformState(const DeformState& from, DeformState& to) {
   return true;
 }
 
+bool adoptElasticMemory(const ImplicitModel& model, std::span<const float> memory,
+                        DeformState& state) {
+  const std::size_t nv = state.memory.size();
+  if (memory.size() != nv || model.calibration.prims.size() != nv) return false;
+  for (const float m : memory) {
+    if (!(m <= 0.0f) || !std::isfinite(m)) return false;
+  }
+  for (std::size_t v = 0; v < nv; ++v) {
+    const std::int16_t p0 = model.calibration.prims[v][0];
+    const bool inelastic =
+        p0 >= 0 &&
+        model.primitives.items[static_cast<std::size_t>(p0)].elasticity != Elasticity::kElastic;
+    state.memory[v] = inelastic ? memory[v] : 0.0f;
+  }
+  return true;
+}
+
 float vertexFunction(const ImplicitModel& model, std::span<const BodyView> bodies, int self,
                      const DeformInput& input, const DeformState& state,
                      const DeformOptions& options, int v, const glm::vec3& p, glm::vec3* gradient) {

@@ -263,6 +263,14 @@ Status initDeformState(const ImplicitModel& model, std::span<const std::uint32_t
 // of the last frame. Returns false, changing nothing, when the vertex counts differ.
 bool carryDeformState(const DeformState& from, DeformState& to);
 
+// Another site's elastic memory for the same body (one entry per vertex, metres <= 0; e.g.
+// a dent record applied, common/scene/dent_record.hpp) replaces the state's: the body then
+// draws that site's dents, and its own plastic or viscoelastic behaviour goes on from them.
+// A vertex whose own primitive is elastic keeps none (it would never recover). Returns
+// false, changing nothing, when the vertex counts differ or an entry is not finite and <= 0.
+bool adoptElasticMemory(const ImplicitModel& model, std::span<const float> memory,
+                        DeformState& state);
+
 // Steps 2 and 3 for body `self` of the scene `bodies` (its posed primitives must be
 // bodies[self].posed), given Step 1's interaction list over the same bodies. Writes
 // state.positions, normals, flags, counters, contacts; updates warm starts and memory.

@@ -403,6 +403,10 @@ bool DeformScene::carryState(int index, const DeformState& from) {
   SceneSlot& b = impl_->bodies[static_cast<std::size_t>(index)];
   return b.deforms && carryDeformState(from, b.state);
 }
+bool DeformScene::adoptMemory(int index, std::span<const float> memory) {
+  SceneSlot& b = impl_->bodies[static_cast<std::size_t>(index)];
+  return b.deforms && adoptElasticMemory(*b.model, memory, b.state);
+}
 const SkinningRig& DeformScene::skinningRig(int index) const {
   return impl_->bodies[static_cast<std::size_t>(index)].rig;
 }

@@ -184,6 +184,10 @@ void Lobby::handleMessage(ConnId conn, Connection& c, std::span<const std::uint8
       if (!joined) break;
       handleSpawn(c, msg.spawn_prop(), now, fx);
       return;
+    case control::ClientMessage::kDents:
+      if (!joined) break;
+      handleDents(c, msg.dents(), now, fx);
+      return;
     case control::ClientMessage::BODY_NOT_SET:
       break;
   }
@@ -419,6 +423,7 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
                : wait_for_upload ? ", waiting for its upload by another member"
                                  : ", upload requested");
   sendRoster(*room, fx);
+  sendKeptDents(*room, conn, fx);
 }
 
 void Lobby::handleChunk(ConnId conn, Connection& c, const control::AvatarChunk& chunk, double now,
@@ -603,6 +608,7 @@ void Lobby::handleSpawn(Connection& c, const control::SpawnProp& spawn, double n
     remove.prop = oldest->id;
     fx.room_commands.push_back(remove);
     prop_ids_.release(oldest->id.value);
+    room.dents.erase(dentsKey(true, oldest->id.value));
     room.props.erase(oldest);
   }
   // Above the member's head (the room knows its posture); the seat's column as fallback.
@@ -891,8 +897,9 @@ void Lobby::removeMember(MemberId id, std::string_view reason, Effects& fx) {
   Member& m = it->second;
   RoomRecord& room = rooms_.at(m.room.value);
 
-  // Out of the room: seat, roster, the room's mirror.
+  // Out of the room: seat, roster, dents, the room's mirror.
   std::erase(room.members, id);
+  room.dents.erase(dentsKey(false, id.value));
   room.seat_taken[static_cast<std::size_t>(m.seat)] = false;
   RoomCommand cmd;
   cmd.kind = RoomCommand::Kind::kRemoveMember;

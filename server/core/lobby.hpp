@@ -42,6 +42,14 @@
 // Props: the lobby owns each room's prop list (ids, specs; the Roster carries them) and
 // tells rooms to spawn and remove; rooms decide positions and step them. A room starts
 // with the config's [[prop]] entries.
+//
+// Dents (proto/SESSION.md §2.5; lobby_dents.cpp): a member's Dents for its own avatar or a
+// prop of its room is checked (common/scene/dent_record.hpp, [limits] max_dent_vertices),
+// kept as the body's newest and relayed to the rest of the room; a joiner gets every one
+// the room keeps after its Roster. Dents for another member's avatar or an unknown body,
+// malformed ones, and ones faster than dents_interval_s per body and sender are ignored
+// (counted, logged; the sender stays). A body's dents go with it (member left, prop
+// removed), so a room keeps at most one message per body.
 #pragma once
 
 #include <cstdint>
@@ -69,7 +77,7 @@
 
 namespace vistel::server {
 
-inline constexpr std::uint32_t kProtocolVersion = 4;
+inline constexpr std::uint32_t kProtocolVersion = 5;
 
 // What a spectator (server/web) may see of a room: its members as the roster names them.
 // Times are the lobby's clock (the `now` it is fed), seconds.
@@ -178,7 +186,8 @@ class Lobby {
     wire::Endpoint challenged;    // the address the last challenge went to
     std::uint64_t challenge = 0;  // ... and its cookie (0: none)
     double last_spawn = -1e300;
-    double joined_at = 0.0;  // lobby clock
+    std::vector<std::pair<std::uint64_t, double>> dents_sent_at;  // (body key, lobby clock)
+    double joined_at = 0.0;                                       // lobby clock
   };
   struct PropRecord {
     PropId id;
@@ -191,8 +200,10 @@ class Lobby {
     std::vector<MemberId> members;  // join order
     std::vector<bool> seat_taken;   // per seat
     std::vector<PropRecord> props;  // spawn order
-    std::string creator_address;    // counted in rooms_by_address_ ("" = not counted)
-    double created_at = 0.0;        // lobby clock
+    // Each body's newest Dents as the framed ServerMessage sent to the room (by dentsKey).
+    std::unordered_map<std::uint64_t, std::vector<std::uint8_t>> dents;
+    std::string creator_address;  // counted in rooms_by_address_ ("" = not counted)
+    double created_at = 0.0;      // lobby clock
   };
   LobbyRoomView viewOf(const RoomRecord& room) const;
 
@@ -206,6 +217,12 @@ class Lobby {
                    Effects& fx);
   void handleRequest(ConnId conn, const control::AvatarRequest& request, double now, Effects& fx);
   void handleSpawn(Connection& c, const control::SpawnProp& spawn, double now, Effects& fx);
+  // Dents (lobby_dents.cpp): check, keep, relay; a joiner gets what its room keeps.
+  void handleDents(Connection& c, const control::Dents& dents, double now, Effects& fx);
+  void sendKeptDents(const RoomRecord& room, ConnId conn, Effects& fx) const;
+  static std::uint64_t dentsKey(bool prop, std::uint32_t body_id) {
+    return (std::uint64_t{prop ? 1u : 0u} << 32) | body_id;
+  }
   // A prop into a room: allocates its id, tells the room (which places it: above
   // `requester`'s head, else at position) and records it. False when no id is free.
   bool spawnProp(RoomRecord& room, const PropSpec& spec, MemberId requester,

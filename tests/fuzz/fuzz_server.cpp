@@ -183,6 +183,19 @@ std::vector<fuzz::Seed> makeSeeds() {
   control::ClientMessage spawn;
   spawn.mutable_spawn_prop()->set_kind(control::SpawnProp::BALL);
   one.message(0, spawn);
+  // Dents of the first member's avatar (the first handle of a fresh pool) and of a prop.
+  control::ClientMessage dents;
+  control::Dents& d = *dents.mutable_dents();
+  d.set_body_id(0x00010000u);
+  d.set_vertex_count(64);
+  d.set_server_time(0.5);
+  for (std::uint32_t k = 0; k < 4; ++k) {
+    d.add_gaps(k);
+    d.add_depths(10 * (k + 1));
+  }
+  one.message(0, dents);
+  d.set_prop(true);
+  one.message(0, dents);
   one.posture(0, joints, 1);
   one.advance(0, 4);
   one.posture(0, joints, 2);

@@ -62,12 +62,12 @@ inline std::optional<control::ServerMessage> receiveControl(int fd, int timeout_
   return answer;
 }
 
-// A Join of protocol version 4 for room `room` with an avatar of this hash and size.
+// A Join of protocol version 5 for room `room` with an avatar of this hash and size.
 inline control::ClientMessage joinRequest(const std::string& room, const std::string& name,
                                           const std::string& hash, std::uint64_t size) {
   control::ClientMessage msg;
   control::Join& join = *msg.mutable_join();
-  join.set_protocol_version(4);
+  join.set_protocol_version(5);
   // A valid X25519 public key (RFC 7748 §6.1, Alice's): these joins never use UDP.
   join.set_udp_public_key(std::string{
       '\x85', '\x20', '\xf0', '\x09', '\x89', '\x30', '\xa7', '\x54', '\x74', '\x8b', '\x7d',
