@@ -515,6 +515,7 @@ int main(int argc, char** argv) {
   const auto start = Clock::now();
   std::vector<FrameMember> members;
   std::vector<std::pair<std::uint32_t, BallSpec>> props;  // (prop id, ball), sampled below
+  std::vector<float> prop_restitution;                    // per entry of props
   std::vector<PropSample> prop_states;
   PropModels prop_models;
   std::vector<MemberView> views;
@@ -594,10 +595,12 @@ int main(int argc, char** argv) {
         }
       }
       props.clear();
+      prop_restitution.clear();
       prop_states.resize(s.props().size());
       for (const auto& p : s.props()) {
         if (p->track.sample(play_time, prop_states[props.size()])) {
           props.emplace_back(p->id, p->ball);
+          prop_restitution.push_back(p->restitution);
         }
       }
       if (recorder) {
@@ -696,6 +699,10 @@ int main(int argc, char** argv) {
       }
       if (deformer) {
         if (Status st = deformer->sync(views, *view); !st) spdlog::warn("{}", st.error().message);
+        for (std::size_t k = 0; k < props.size(); ++k) {  // the balls' motion: restitution
+          deformer->setMotion(propViewId(props[k].first), prop_states[k].velocity,
+                              prop_restitution[k]);
+        }
         const bool use_server =
             config->server_interactions && driver->withSession([&](const ClientSession& s, double) {
               return server_lists.map(s, *deformer, received_list);

@@ -220,6 +220,7 @@ Status RoomDeformer::sync(std::span<const MemberView> views, RoomView& view) {
     if (body < 0) continue;
     scene->setPosture(body, views[i].posture);
     scene->setPlacement(body, views[i].placement);
+    scene->setMotion(body, glm::vec3(0.0f), 1.0f);  // until setMotion says otherwise
   }
   return dents_status;
 }
@@ -351,6 +352,13 @@ bool RoomDeformer::touching(std::uint32_t view_a, std::uint32_t view_b) const {
     });
   };
   return measured(a, b) || measured(b, a);
+}
+
+bool RoomDeformer::setMotion(std::uint32_t view_id, const glm::vec3& velocity, float restitution) {
+  const int body = bodyOf(view_id);
+  if (body < 0) return false;
+  shared_->scene->setMotion(body, velocity, restitution);
+  return true;
 }
 
 std::optional<DeformTier> RoomDeformer::tier(std::uint32_t view_id) const {

@@ -78,6 +78,10 @@ class RoomDeformer {
   // avatar that does not validate) leaves every body rigid until the set of bodies changes again,
   // and is returned.
   Status sync(std::span<const MemberView> views, RoomView& view);
+  // After sync, before prepare: a view's body's velocity (world m/s) and restitution, for the
+  // contact forces' restitution (DeformScene::setMotion; a prop's from its dynamics). Bodies
+  // not given one this frame are still and elastic. False when the view is not a body.
+  bool setMotion(std::uint32_t view_id, const glm::vec3& velocity, float restitution);
   // After sync: poses the bodies and runs Step 1. time: seconds (viscoelastic recovery).
   // `received`: a Step 1 list in this scene's body indices (see bodyOf); when it fails
   // validation the scene's own list is used and the error returned (the frame is still

@@ -177,6 +177,41 @@ void passContacts(DeformFrame& fr) {
   for (BodyContact& bc : st.contacts) {
     if (bc.area > 0.0) bc.centre /= bc.area;
   }
+  // Restitution: while a partner separates from this body (it moves away along the push the
+  // contact gives it, -force) the pair's force and pressures are e^2 of the law's, as in the
+  // ball dynamics (prop.hpp).
+  const auto nbody = static_cast<int>(fr.bodies.size());
+  if (fr.self < 0 || fr.self >= nbody) return;
+  const BodyView& me = fr.bodies[static_cast<std::size_t>(fr.self)];
+  bool scaled = false;
+  for (BodyContact& bc : st.contacts) {
+    if (bc.partner == fr.self || bc.partner < 0 || bc.partner >= nbody) continue;
+    const BodyView& other = fr.bodies[static_cast<std::size_t>(bc.partner)];
+    const float s =
+        separationScale(me.restitution, other.restitution, me.velocity, other.velocity, -bc.force);
+    if (s == 1.0f) continue;
+    bc.force *= static_cast<double>(s);
+    scaled = true;
+  }
+  if (!scaled) return;
+  for (int chunk = 0; chunk < chunks; ++chunk) {
+    const int first = chunk * fr.chunk;
+    const int count = sc.chunk_counters[static_cast<std::size_t>(chunk)].contact_vertices;
+    for (int i = 0; i < count; ++i) {
+      const std::uint32_t v = sc.contact_list[static_cast<std::size_t>(first + i)];
+      const int partner = st.contact_body[v];
+      if (partner == fr.self || partner < 0 || partner >= nbody) continue;
+      const BodyView& other = fr.bodies[static_cast<std::size_t>(partner)];
+      const BodyContact* bc = nullptr;
+      for (const BodyContact& c : st.contacts) {
+        if (c.partner == partner) bc = &c;
+      }
+      if (bc == nullptr) continue;
+      // (the force was scaled above; its direction is the law's)
+      st.pressure[v] *= separationScale(me.restitution, other.restitution, me.velocity,
+                                        other.velocity, -bc->force);
+    }
+  }
 }
 
 void combineContacts(std::span<const DeformState* const> states, std::vector<PairContact>& out) {

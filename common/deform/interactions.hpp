@@ -19,10 +19,13 @@
 
 namespace vistel {
 
-// One body of the collision world as Step 1 and Step 2 see it (non-owning).
+// One body of the collision world as Step 1 and Step 2 see it (non-owning), and its motion
+// for Step 3's restitution (prop.hpp "The contact law").
 struct BodyView {
   const CombinationGraph* graph = nullptr;  // same-body collision filter; null: no self-contact
   const PosedPrimitives* posed = nullptr;   // this frame's posed primitives, world space
+  glm::vec3 velocity{0.0f};  // linear velocity, world m/s, where known (a prop's); else 0
+  float restitution = 1.0f;  // e in [0, 1] (1: elastic, an avatar's); a pair's is the product
 };
 
 struct Interaction {

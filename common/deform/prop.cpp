@@ -416,7 +416,6 @@ BallStepReport stepBall(BallState& ball, std::span<const BodyView> bodies, float
   const bool moving_bodies = opt.previous.size() == bodies.size() && opt.previous_interval > 0.0f;
   const float inv_interval = moving_bodies ? 1.0f / opt.previous_interval : 0.0f;
   const float r = ball.radius;
-  const float e2 = ball.restitution * ball.restitution;
   const float k_body_core = seriesStiffness(ball.stiffness, kRigidStiffness, opt.max_stiffness);
   glm::vec3 impulse(0.0f);
   float remaining = dt;
@@ -432,7 +431,7 @@ BallStepReport stepBall(BallState& ball, std::span<const BodyView> bodies, float
     float slope = 0.0f;
     float area = 0.0f;
     float f = contactForce(t, k, k_body_core, k_ball_core, r, opt.core_fraction, &slope, &area);
-    if (glm::dot(ball.velocity - v_surface, t.normal) > 0.0f) f *= e2;  // separating
+    f *= restitutionScale(ball.restitution, glm::dot(ball.velocity - v_surface, t.normal));
     const glm::vec3 fv = f * t.normal;
     force += fv;
     if (record) {

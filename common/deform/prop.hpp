@@ -36,8 +36,10 @@
 // Measured on a ball bouncing on the default avatar's head and thigh (tests/deform/
 // bounce_force_test.cpp) the two agree within 10% per frame and 2% in impulse.
 // Restitution e: the force is scaled by e^2 while the ball separates from the surface
-// (relative normal velocity outward), so a bounce returns e^2 of the energy stored, i.e.
-// leaves at e times the impact speed. Step 3 (no velocities) reports the elastic law.
+// (relative normal velocity outward: restitutionScale), so a bounce returns e^2 of the
+// energy stored, i.e. leaves at e times the impact speed. Step 3 does the same per body pair
+// (separationScale) from the bodies' velocities and restitutions in their BodyViews (e = the
+// product of the two; a prop's velocity is its dynamics' own, an avatar's is taken as 0).
 #pragma once
 
 #include <array>
@@ -120,6 +122,21 @@ float contactCoreDepth(float skin_radius, float k_own, float k_other);
 // kMaxContactStiffness. 0 before the cores and for bad input. Cost: a few operations.
 float contactCorePressure(float depth, float pressure, float k_own, float own_radius,
                           float partner_radius);
+
+// The restitution factor of the contact law at a relative normal velocity v_n (m/s; > 0:
+// separating): e^2 while separating, else 1.
+inline float restitutionScale(float e, float v_n) { return v_n > 0.0f ? e * e : 1.0f; }
+
+// The same for a body pair in Step 3 (e = e_body e_partner): v_n is the partner's velocity
+// relative to the body along `push`, the direction the contact pushes the partner.
+inline float separationScale(float e_body, float e_partner, const glm::vec3& v_body,
+                             const glm::vec3& v_partner, const glm::dvec3& push) {
+  const float e = e_body * e_partner;
+  const double len = glm::length(push);
+  if (!(e < 1.0f) || !(len > 0.0)) return 1.0f;
+  const double v_n = glm::dot(glm::dvec3(v_partner) - glm::dvec3(v_body), push) / len;
+  return restitutionScale(e, static_cast<float>(v_n));
+}
 
 struct BallStepOptions {
   // m/s^2

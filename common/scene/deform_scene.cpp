@@ -278,6 +278,14 @@ void DeformScene::setPlacement(int index, const glm::mat4& placement) {
   impl_->bodies[static_cast<std::size_t>(index)].def.placement = placement;
 }
 
+void DeformScene::setMotion(int index, const glm::vec3& velocity, float restitution) {
+  BodyView& v = impl_->views[static_cast<std::size_t>(index)];
+  const bool finite =
+      std::isfinite(velocity.x) && std::isfinite(velocity.y) && std::isfinite(velocity.z);
+  v.velocity = finite ? velocity : glm::vec3(0.0f);
+  v.restitution = restitution >= 0.0f && restitution <= 1.0f ? restitution : 1.0f;
+}
+
 Status DeformScene::prepare(double time, const InteractionList* received) {
   Impl& s = *impl_;
   s.time = time;

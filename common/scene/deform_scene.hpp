@@ -120,6 +120,9 @@ class DeformScene {
   Posture& posture(int index);
   void setPosture(int index, const Posture& posture);
   void setPlacement(int index, const glm::mat4& placement);
+  // The body's linear velocity (world m/s; a prop's, from its dynamics) and restitution
+  // ([0, 1]), for Step 3's restitution (prop.hpp "The contact law"). Default: still, 1.
+  void setMotion(int index, const glm::vec3& velocity, float restitution);
 
   // The whole frame (see the top of the file). `received`: Step 1's list from a server in
   // this scene's body indices (only `pairs` is read); when it fails validation the scene

@@ -7,13 +7,18 @@
 // the same configuration agree within 20% in every frame of the bounce (frames whose force is
 // at least 5% of the peak: at the first and last touch both are a few newtons, and one vertex
 // more or less is a large fraction), and so do the impulses over the bounce.
-// The ball is elastic here (restitution 1): the dynamics' restitution scales the force while
-// the ball separates, which the deformation (no velocities) does not model; printed apart.
+// With restitution e < 1 both scale the force by e^2 while the ball separates: the dynamics
+// from the ball's velocity along the field's gradient at its centre, Step 3 along the force
+// it summed over the mesh (the ball's velocity is the dynamics', the avatar still). The two
+// directions differ by up to ~25 degrees on the skull, so in the frame where the ball turns
+// one may read "separating" and the other not (a ratio of 1/e^2 = 1.78 at e = 0.75): one such
+// frame per bounce is allowed and counted.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
@@ -37,7 +42,9 @@ struct BounceFigures {
   int compared = 0;              // frames with the dynamics' force >= 5% of its peak
   double low = 1.0, high = 1.0;  // smallest and largest mesh / dynamics over compared frames
   int low_frame = -1, high_frame = -1;
-  double peak_mesh = 0.0;  // N
+  int outside = 0;                         // compared frames outside [0.8, 1.2]
+  double low_rest = 1.0, high_rest = 1.0;  // the same without the frame farthest from 1
+  double peak_mesh = 0.0;                  // N
   double peak_dynamics = 0.0;
   double impulse_mesh = 0.0;  // N s along the dynamics' mean direction
   double impulse_dynamics = 0.0;
@@ -107,6 +114,8 @@ BounceFigures bounce(const test::RealAvatar& a, const Target& target, const Ball
     // its Step 3 force from the ball), the scene's for the pair (with the soft ball's own
     // measure), and the dynamics' at the same state.
     ball_body->placement = ballPlacement(ball);
+    ball_body->velocity = ball.velocity;
+    ball_body->restitution = ball.restitution;
     scene.step(k * static_cast<double>(kFineDt));
     glm::dvec3 mesh(0.0);
     for (const BodyContact& c : body->state.contacts) {
@@ -139,11 +148,14 @@ BounceFigures bounce(const test::RealAvatar& a, const Target& target, const Ball
     fig.peak_mesh = std::max(fig.peak_mesh, m);
     fig.peak_dynamics = std::max(fig.peak_dynamics, d);
   }
+  std::vector<double> ratios;
   for (std::size_t i = 0; i < series.size(); ++i) {
     const auto [m, d] = series[i];
     if (d < 0.05 * fig.peak_dynamics) continue;
     ++fig.compared;
     const double ratio = m / d;
+    ratios.push_back(ratio);
+    if (ratio < 0.8 || ratio > 1.2) ++fig.outside;
     if (fig.compared == 1 || ratio < fig.low) {
       fig.low = ratio;
       fig.low_frame = static_cast<int>(i);
@@ -152,6 +164,15 @@ BounceFigures bounce(const test::RealAvatar& a, const Target& target, const Ball
       fig.high = ratio;
       fig.high_frame = static_cast<int>(i);
     }
+  }
+  // Without the frame farthest from 1 (in log terms).
+  if (ratios.size() > 1) {
+    const auto worst = std::max_element(ratios.begin(), ratios.end(), [](double x, double y) {
+      return std::abs(std::log(x)) < std::abs(std::log(y));
+    });
+    ratios.erase(worst);
+    fig.low_rest = *std::min_element(ratios.begin(), ratios.end());
+    fig.high_rest = *std::max_element(ratios.begin(), ratios.end());
   }
   const glm::dvec3 n =
       glm::length(impulse_dyn) > 0.0 ? glm::normalize(impulse_dyn) : glm::dvec3(target.from);
@@ -179,17 +200,24 @@ void bounceOn(const char* which, std::span<const Case> cases) {
     std::printf(
         "%s, %s ball (e = %.2f) on %s at %.1f m/s: %d contact frames; peak force avatar %.1f N, "
         "dynamics %.1f N; per frame avatar / dynamics %.3f..%.3f over %d frames; impulse avatar "
-        "%.3f N s, dynamics %.3f N s (ratio %.3f; the scene's pair %.3f); rebound %.2f%s\n",
+        "%.3f N s, dynamics %.3f N s (ratio %.3f; the scene's pair %.3f); rebound %.2f; %d "
+        "frame(s) outside 0.8..1.2%s\n",
         which, c.ball, c.state.restitution, c.target.part, c.target.speed, f.frames, f.peak_mesh,
         f.peak_dynamics, f.low, f.high, f.compared, f.impulse_mesh, f.impulse_dynamics,
-        impulse_ratio, f.impulse_pair / f.impulse_dynamics, f.rebound,
+        impulse_ratio, f.impulse_pair / f.impulse_dynamics, f.rebound, f.outside,
         c.checked ? "" : " (not checked)");
     if (!c.checked) continue;
     EXPECT_GT(f.compared, 3) << which << " " << c.ball << " " << c.target.part;
-    EXPECT_GT(f.low, 0.8) << which << " " << c.ball << " " << c.target.part << " frame "
-                          << f.low_frame;
-    EXPECT_LT(f.high, 1.2) << which << " " << c.ball << " " << c.target.part << " frame "
-                           << f.high_frame;
+    if (c.state.restitution < 1.0f) {  // the turn may fall on either side (see the top)
+      EXPECT_LE(f.outside, 1) << which << " " << c.ball << " " << c.target.part;
+      EXPECT_GT(f.low_rest, 0.8) << which << " " << c.ball << " " << c.target.part;
+      EXPECT_LT(f.high_rest, 1.2) << which << " " << c.ball << " " << c.target.part;
+    } else {
+      EXPECT_GT(f.low, 0.8) << which << " " << c.ball << " " << c.target.part << " frame "
+                            << f.low_frame;
+      EXPECT_LT(f.high, 1.2) << which << " " << c.ball << " " << c.target.part << " frame "
+                             << f.high_frame;
+    }
     EXPECT_NEAR(impulse_ratio, 1.0, 0.2) << which << " " << c.ball << " " << c.target.part;
     EXPECT_GT(f.rebound, 0.5) << which << " " << c.ball << " " << c.target.part;
   }
@@ -216,9 +244,9 @@ TEST(BounceForce, DefaultAvatarHeadAndThigh) {
       // the skull (5.6 cm of its 11; from 1.5 m/s on): there the dynamics' lens of the ball's
       // core and the mesh's vertex depths part by 25-30%.
       {"soft", serverBall(true, 1.0f), {"head", up, 3.0f}, false},
-      // With restitution the dynamics weaken the force while the ball separates (e^2); the
-      // mesh reports the elastic law.
-      {"rigid", serverBall(false, 0.75f), {"head", up, 3.0f}, false},
+      // Restitution: both weaken the force while the ball separates (e^2), the server's 0.75.
+      {"rigid", serverBall(false, 0.75f), {"head", up, 3.0f}, true},
+      {"soft", serverBall(true, 0.75f), {"l_thigh", front, 3.0f}, true},
   };
   bounceOn("default", cases);
 }

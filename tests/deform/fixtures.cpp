@@ -214,7 +214,8 @@ void Scene::step(double time) {
   views.resize(bodies.size());
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     bodies[i]->pose();
-    views[i] = BodyView{&bodies[i]->model.graph, &bodies[i]->posed};
+    views[i] = BodyView{&bodies[i]->model.graph, &bodies[i]->posed, bodies[i]->velocity,
+                        bodies[i]->restitution};
   }
   buildInteractions(views, scratch, list);
   states.assign(bodies.size(), nullptr);

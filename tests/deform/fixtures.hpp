@@ -37,7 +37,9 @@ struct Body {
   ImplicitModel model;
   glm::mat4 placement{1.0f};
   Posture posture;
-  bool deform = true;  // run Steps 2-3 on it
+  bool deform = true;        // run Steps 2-3 on it
+  glm::vec3 velocity{0.0f};  // its BodyView's motion (Step 3's restitution)
+  float restitution = 1.0f;
 
   std::vector<glm::mat4> model_xf, skin_xf;
   std::vector<DualQuat> dq;
