@@ -78,102 +78,98 @@ void passContacts(DeformFrame& fr) {
     st.contacts.back().partner = partner;
     return st.contacts.back();
   };
+  // The contact vertices in their fixed order: each chunk's list, in vertex order.
+  const auto forEachContactVertex = [&](const auto& f) {
+    for (int chunk = 0; chunk < chunks; ++chunk) {
+      const int first = chunk * fr.chunk;
+      const int count = sc.chunk_counters[static_cast<std::size_t>(chunk)].contact_vertices;
+      for (int i = 0; i < count; ++i) f(sc.contact_list[static_cast<std::size_t>(first + i)]);
+    }
+  };
   // Each contact vertex's pressure by the contact law (prop.hpp), before the faces read it:
   // pass A's series stiffness times the vertex's depth below the partner's skin, plus the
   // cores' (contactCorePressure) from its own skin radius and the partner's on that ray.
-  for (int chunk = 0; chunk < chunks; ++chunk) {
-    const int first = chunk * fr.chunk;
-    const int count = sc.chunk_counters[static_cast<std::size_t>(chunk)].contact_vertices;
-    for (int i = 0; i < count; ++i) {
-      const std::uint32_t v = sc.contact_list[static_cast<std::size_t>(first + i)];
-      if (!(st.depth[v] > 0.0f) || !(st.pressure[v] > 0.0f)) continue;
-      const glm::vec3& p = fr.in->rigid_positions[v];
-      // The vertex's own skin radius: its distance from its primitive's skeleton.
-      float own_radius = 0.0f;
-      const float k_own = ownStiffness(fr, static_cast<int>(v));
-      const std::int16_t own = fr.model->calibration.prims[v][0];
-      if (own >= 0 && fr.posed != nullptr) {
-        float scale = 1.0f;
-        const glm::vec3 off =
-            skeletonOffset(fr.posed->items[static_cast<std::size_t>(own)].shape, p, scale);
-        own_radius = std::sqrt(glm::dot(off, off));
-      }
-      // The partner's, on the ray through the vertex of the partner primitive it is deepest in.
-      float partner_radius = 0.0f;
-      float deepest = -INFINITY;
-      const int nc = sc.cand_count[v] & 0x7f;
-      for (int j = 0; j < nc; ++j) {
-        const DeformScratch::CandidateSlot& cs =
-            sc.candidates[static_cast<std::size_t>(v) * kMaxCandidates +
-                          static_cast<std::size_t>(j)];
-        const DeformScratch::Collider& col = sc.colliders[cs.collider];
-        if (col.body != st.contact_body[v] || col.posed == nullptr) continue;
-        float scale = 1.0f;
-        const glm::vec3 off = skeletonOffset(col.posed->shape, p, scale);
-        const float units = scale > 0.0f ? 1.0f / scale : 1.0f;
-        const float surface = skinSurfaceDistance(*col.posed, cs.omega) * units;
-        const float depth = surface - std::sqrt(glm::dot(off, off));
-        if (depth > deepest) {
-          deepest = depth;
-          partner_radius = surface;
-        }
-      }
-      // The common law on the skins' own geometry: the depth below the partner's skin on that
-      // ray, exact for every profile (pass A's first-order estimate x / |grad x| grows without
-      // bound towards a primitive's centre), times the series stiffness, plus the cores'.
-      const float k = st.pressure[v] / st.depth[v];
-      const float depth = deepest > -INFINITY ? std::max(deepest, 0.0f) : st.depth[v];
-      const float law = k * depth;
-      st.pressure[v] = law + contactCorePressure(depth, law, k_own, own_radius, partner_radius);
+  forEachContactVertex([&](std::uint32_t v) {
+    if (!(st.depth[v] > 0.0f) || !(st.pressure[v] > 0.0f)) return;
+    const glm::vec3& p = fr.in->rigid_positions[v];
+    // The vertex's own skin radius: its distance from its primitive's skeleton.
+    float own_radius = 0.0f;
+    const float k_own = ownStiffness(fr, static_cast<int>(v));
+    const std::int16_t own = fr.model->calibration.prims[v][0];
+    if (own >= 0 && fr.posed != nullptr) {
+      float scale = 1.0f;
+      const glm::vec3 off =
+          skeletonOffset(fr.posed->items[static_cast<std::size_t>(own)].shape, p, scale);
+      own_radius = std::sqrt(glm::dot(off, off));
     }
-  }
-  for (int chunk = 0; chunk < chunks; ++chunk) {
-    const int first = chunk * fr.chunk;
-    const int count = sc.chunk_counters[static_cast<std::size_t>(chunk)].contact_vertices;
-    for (int i = 0; i < count; ++i) {
-      const std::uint32_t v = sc.contact_list[static_cast<std::size_t>(first + i)];
-      const int partner = st.contact_body[v];
-      BodyContact& bc = entry(partner);
-      ++bc.vertices;
-      bc.max_depth = std::max(bc.max_depth, static_cast<double>(st.depth[v]));
-      // Each face touching the contact once: from its lowest vertex in contact with this
-      // partner. The pressure is linear over the face, zero at a vertex not in contact with
-      // this partner, so the forces integrate it over every face it covers (a face on the
-      // contact's rim carries part of it); the area counts faces wholly in contact.
-      for (std::uint32_t k = sc.vf_offsets[v]; k < sc.vf_offsets[v + 1]; ++k) {
-        const std::size_t f = 3u * sc.vf_faces[k];
-        const std::uint32_t a = idx[f], b = idx[f + 1], c = idx[f + 2];
-        const bool in_a = st.contact_body[a] == partner;
-        const bool in_b = st.contact_body[b] == partner;
-        const bool in_c = st.contact_body[c] == partner;
-        if ((in_a && a < v) || (in_b && b < v) || (in_c && c < v)) continue;
-        const glm::dvec3 pa(st.positions[a]), pb(st.positions[b]), pc(st.positions[c]);
-        const glm::dvec3 cr = glm::cross(pb - pa, pc - pa);
-        const double twice_area = glm::length(cr);
-        if (!(twice_area > 0.0)) continue;
-        // The skin in contact is the skin that was there: a face stretched by projecting its
-        // vertices along diverging normals (a nose tip deep in a ball) counts with its
-        // skinned area, so area and force stay bounded at any depth.
-        const glm::dvec3 ra(fr.in->rigid_positions[a]);
-        const double rigid_twice_area =
-            glm::length(glm::cross(glm::dvec3(fr.in->rigid_positions[b]) - ra,
-                                   glm::dvec3(fr.in->rigid_positions[c]) - ra));
-        const double area = 0.5 * std::min(twice_area, rigid_twice_area);
-        const double p_mean = ((in_a ? static_cast<double>(st.pressure[a]) : 0.0) +
-                               (in_b ? static_cast<double>(st.pressure[b]) : 0.0) +
-                               (in_c ? static_cast<double>(st.pressure[c]) : 0.0)) /
-                              3.0;
-        // The law integrates over the skin where the depths were measured, the skinned skin
-        // (a dent pressed towards the bone shrinks its faces, not the load they carry), along
-        // the deformed face's normal.
-        bc.force -= (p_mean * 0.5 * rigid_twice_area / twice_area) * cr;
-        if (in_a && in_b && in_c) {
-          bc.area += area;
-          bc.centre += area * (pa + pb + pc) / 3.0;
-        }
+    // The partner's, on the ray through the vertex of the partner primitive it is deepest in.
+    float partner_radius = 0.0f;
+    float deepest = -INFINITY;
+    const int nc = sc.cand_count[v] & 0x7f;
+    for (int j = 0; j < nc; ++j) {
+      const DeformScratch::CandidateSlot& cs =
+          sc.candidates[static_cast<std::size_t>(v) * kMaxCandidates + static_cast<std::size_t>(j)];
+      const DeformScratch::Collider& col = sc.colliders[cs.collider];
+      if (col.body != st.contact_body[v] || col.posed == nullptr) continue;
+      float scale = 1.0f;
+      const glm::vec3 off = skeletonOffset(col.posed->shape, p, scale);
+      const float units = scale > 0.0f ? 1.0f / scale : 1.0f;
+      const float surface = skinSurfaceDistance(*col.posed, cs.omega) * units;
+      const float depth = surface - std::sqrt(glm::dot(off, off));
+      if (depth > deepest) {
+        deepest = depth;
+        partner_radius = surface;
       }
     }
-  }
+    // The common law on the skins' own geometry: the depth below the partner's skin on that
+    // ray, exact for every profile (pass A's first-order estimate x / |grad x| grows without
+    // bound towards a primitive's centre), times the series stiffness, plus the cores'.
+    const float k = st.pressure[v] / st.depth[v];
+    const float depth = deepest > -INFINITY ? std::max(deepest, 0.0f) : st.depth[v];
+    const float law = k * depth;
+    st.pressure[v] = law + contactCorePressure(depth, law, k_own, own_radius, partner_radius);
+  });
+  forEachContactVertex([&](std::uint32_t v) {
+    const int partner = st.contact_body[v];
+    BodyContact& bc = entry(partner);
+    ++bc.vertices;
+    bc.max_depth = std::max(bc.max_depth, static_cast<double>(st.depth[v]));
+    // Each face touching the contact once: from its lowest vertex in contact with this
+    // partner. The pressure is linear over the face, zero at a vertex not in contact with
+    // this partner, so the forces integrate it over every face it covers (a face on the
+    // contact's rim carries part of it); the area counts faces wholly in contact.
+    for (std::uint32_t k = sc.vf_offsets[v]; k < sc.vf_offsets[v + 1]; ++k) {
+      const std::size_t f = 3u * sc.vf_faces[k];
+      const std::uint32_t a = idx[f], b = idx[f + 1], c = idx[f + 2];
+      const bool in_a = st.contact_body[a] == partner;
+      const bool in_b = st.contact_body[b] == partner;
+      const bool in_c = st.contact_body[c] == partner;
+      if ((in_a && a < v) || (in_b && b < v) || (in_c && c < v)) continue;
+      const glm::dvec3 pa(st.positions[a]), pb(st.positions[b]), pc(st.positions[c]);
+      const glm::dvec3 cr = glm::cross(pb - pa, pc - pa);
+      const double twice_area = glm::length(cr);
+      if (!(twice_area > 0.0)) continue;
+      // The skin in contact is the skin that was there: a face stretched by projecting its
+      // vertices along diverging normals (a nose tip deep in a ball) counts with its
+      // skinned area, so area and force stay bounded at any depth.
+      const glm::dvec3 ra(fr.in->rigid_positions[a]);
+      const double rigid_twice_area = glm::length(glm::cross(
+          glm::dvec3(fr.in->rigid_positions[b]) - ra, glm::dvec3(fr.in->rigid_positions[c]) - ra));
+      const double area = 0.5 * std::min(twice_area, rigid_twice_area);
+      const double p_mean = ((in_a ? static_cast<double>(st.pressure[a]) : 0.0) +
+                             (in_b ? static_cast<double>(st.pressure[b]) : 0.0) +
+                             (in_c ? static_cast<double>(st.pressure[c]) : 0.0)) /
+                            3.0;
+      // The law integrates over the skin where the depths were measured, the skinned skin
+      // (a dent pressed towards the bone shrinks its faces, not the load they carry), along
+      // the deformed face's normal.
+      bc.force -= (p_mean * 0.5 * rigid_twice_area / twice_area) * cr;
+      if (in_a && in_b && in_c) {
+        bc.area += area;
+        bc.centre += area * (pa + pb + pc) / 3.0;
+      }
+    }
+  });
   for (BodyContact& bc : st.contacts) {
     if (bc.area > 0.0) bc.centre /= bc.area;
   }
@@ -194,24 +190,19 @@ void passContacts(DeformFrame& fr) {
     scaled = true;
   }
   if (!scaled) return;
-  for (int chunk = 0; chunk < chunks; ++chunk) {
-    const int first = chunk * fr.chunk;
-    const int count = sc.chunk_counters[static_cast<std::size_t>(chunk)].contact_vertices;
-    for (int i = 0; i < count; ++i) {
-      const std::uint32_t v = sc.contact_list[static_cast<std::size_t>(first + i)];
-      const int partner = st.contact_body[v];
-      if (partner == fr.self || partner < 0 || partner >= nbody) continue;
-      const BodyView& other = fr.bodies[static_cast<std::size_t>(partner)];
-      const BodyContact* bc = nullptr;
-      for (const BodyContact& c : st.contacts) {
-        if (c.partner == partner) bc = &c;
-      }
-      if (bc == nullptr) continue;
-      // (the force was scaled above; its direction is the law's)
-      st.pressure[v] *= separationScale(me.restitution, other.restitution, me.velocity,
-                                        other.velocity, -bc->force);
+  forEachContactVertex([&](std::uint32_t v) {
+    const int partner = st.contact_body[v];
+    if (partner == fr.self || partner < 0 || partner >= nbody) return;
+    const BodyView& other = fr.bodies[static_cast<std::size_t>(partner)];
+    const BodyContact* bc = nullptr;
+    for (const BodyContact& c : st.contacts) {
+      if (c.partner == partner) bc = &c;
     }
-  }
+    if (bc == nullptr) return;
+    // (the force was scaled above; its direction is the law's)
+    st.pressure[v] *=
+        separationScale(me.restitution, other.restitution, me.velocity, other.velocity, -bc->force);
+  });
 }
 
 void combineContacts(std::span<const DeformState* const> states, std::vector<PairContact>& out) {

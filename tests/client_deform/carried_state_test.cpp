@@ -11,33 +11,13 @@
 #include "client/deform/room_deformer.hpp"
 #include "client/view/room_view.hpp"
 #include "common/deform/prop.hpp"
+#include "tests/client_deform/ball_views.hpp"
 
 namespace vistel {
 namespace {
 
 constexpr float kRadius = 0.05f;
 constexpr std::uint32_t kSoft = 3, kPresser = 4, kNewcomer = 5;
-
-std::shared_ptr<const AvatarModel> ball(float stiffness, Elasticity elasticity) {
-  BallSpec spec;
-  spec.radius = kRadius;
-  spec.stiffness = stiffness;
-  spec.elasticity = elasticity;
-  Result<std::shared_ptr<const AvatarModel>> b = makeBallAvatar(spec);
-  EXPECT_TRUE(b.ok()) << (b.ok() ? "" : b.error().message);
-  return b.ok() ? *b : nullptr;
-}
-
-MemberView member(std::uint32_t id, std::shared_ptr<const AvatarModel> avatar,
-                  const glm::vec3& at) {
-  MemberView v;
-  v.id = id;
-  v.name = "ball " + std::to_string(id);
-  v.avatar = std::move(avatar);
-  v.placement = glm::translate(glm::mat4(1.0f), at);
-  v.posture = restPosture(v.avatar->skeleton);
-  return v;
-}
 
 // The soft ball's dent: its largest |deformed - rigid| this frame.
 float dent(const RoomDeformer& deformer, const MemberView& soft) {
@@ -52,23 +32,19 @@ float dent(const RoomDeformer& deformer, const MemberView& soft) {
 }
 
 float dentAfterPressing(bool newcomer_joins) {
-  ViewOptions options;
-  options.headless = true;
-  options.worker_threads = 1;
-  Result<std::unique_ptr<RoomView>> view = RoomView::create(options);
-  EXPECT_TRUE(view.ok());
+  std::unique_ptr<RoomView> view = test::headlessView();
   if (!view) return -1.0f;
   RoomDeformer deformer;
-  const auto soft = ball(3.0e4f, Elasticity::kPlastic);
-  const auto rigid = ball(kRigidStiffness, Elasticity::kElastic);
+  const auto soft = test::ballAvatar(kRadius, 3.0e4f, Elasticity::kPlastic);
+  const auto rigid = test::ballAvatar(kRadius, kRigidStiffness);
   std::vector<MemberView> views = {
-      member(kSoft, soft, glm::vec3(0.0f)),
-      member(kPresser, rigid, glm::vec3(2.0f * kRadius - 0.01f, 0, 0))};
+      test::ballView(kSoft, soft, glm::vec3(0.0f)),
+      test::ballView(kPresser, rigid, glm::vec3(2.0f * kRadius - 0.01f, 0, 0))};
   double t = 0.0;
   const auto frame = [&]() {
-    EXPECT_TRUE(deformer.sync(views, **view).ok());
+    EXPECT_TRUE(deformer.sync(views, *view).ok());
     EXPECT_TRUE(deformer.prepare(t).ok());
-    (*view)->render(views);
+    view->render(views);
     deformer.finish();
     t += 1.0 / 60.0;
   };
@@ -78,7 +54,8 @@ float dentAfterPressing(bool newcomer_joins) {
   const float before = dent(deformer, views[0]);
   EXPECT_GT(before, 0.003f) << "the plastic ball keeps a dent";
   const int rebuilds = deformer.rebuilds();
-  if (newcomer_joins) views.push_back(member(kNewcomer, rigid, glm::vec3(-1.0f, 0.0f, 0.0f)));
+  if (newcomer_joins)
+    views.push_back(test::ballView(kNewcomer, rigid, glm::vec3(-1.0f, 0.0f, 0.0f)));
   for (int k = 0; k < 3; ++k) frame();
   EXPECT_EQ(deformer.rebuilds(), rebuilds + (newcomer_joins ? 1 : 0));
   return dent(deformer, views[0]) / before;

@@ -11,6 +11,7 @@
 #include "client/deform/room_deformer.hpp"
 #include "client/view/room_view.hpp"
 #include "common/deform/prop.hpp"
+#include "tests/client_deform/ball_views.hpp"
 
 namespace vistel {
 namespace {
@@ -18,46 +19,24 @@ namespace {
 constexpr std::uint32_t kSoftBall = 3, kRigidBall = 4;
 constexpr float kSoftRadius = 0.05f;
 
-std::shared_ptr<const AvatarModel> ballModel(float stiffness) {
-  BallSpec spec;
-  spec.radius = kSoftRadius;
-  spec.stiffness = stiffness;
-  Result<std::shared_ptr<const AvatarModel>> b = makeBallAvatar(spec);
-  EXPECT_TRUE(b.ok()) << (b.ok() ? "" : b.error().message);
-  return b.ok() ? *b : nullptr;
-}
-
-MemberView ballView(std::uint32_t id, std::shared_ptr<const AvatarModel> avatar,
-                    const glm::vec3& at) {
-  MemberView v;
-  v.id = id;
-  v.avatar = std::move(avatar);
-  v.placement = glm::translate(glm::mat4(1.0f), at);
-  v.posture = restPosture(v.avatar->skeleton);
-  return v;
-}
-
 // The soft ball's contact force (N) in one frame with the rigid ball 1 cm into it, moving at
 // `velocity` (x: away from the soft ball when positive) with restitution `e`; the pressure
 // its part forces would read is summed into *pressure.
 double forceWith(bool set_motion, float velocity, float e, double* pressure) {
-  ViewOptions options;
-  options.headless = true;
-  options.worker_threads = 1;
-  Result<std::unique_ptr<RoomView>> view = RoomView::create(options);
-  EXPECT_TRUE(view.ok());
+  std::unique_ptr<RoomView> view = test::headlessView();
   if (!view) return -1.0;
   RoomDeformer deformer;
-  std::vector<MemberView> views = {ballView(kSoftBall, ballModel(3.0e4f), glm::vec3(0.0f)),
-                                   ballView(kRigidBall, ballModel(kRigidStiffness),
-                                            glm::vec3(2.0f * kSoftRadius - 0.01f, 0, 0))};
-  EXPECT_TRUE(deformer.sync(views, **view).ok());
+  std::vector<MemberView> views = {
+      test::ballView(kSoftBall, test::ballAvatar(kSoftRadius, 3.0e4f), glm::vec3(0.0f)),
+      test::ballView(kRigidBall, test::ballAvatar(kSoftRadius, kRigidStiffness),
+                     glm::vec3(2.0f * kSoftRadius - 0.01f, 0, 0))};
+  EXPECT_TRUE(deformer.sync(views, *view).ok());
   if (set_motion) {
     EXPECT_TRUE(deformer.setMotion(kRigidBall, glm::vec3(velocity, 0.0f, 0.0f), e));
   }
   EXPECT_FALSE(deformer.setMotion(99, glm::vec3(0.0f), e)) << "not a body";
   EXPECT_TRUE(deformer.prepare(0.0).ok());
-  (*view)->render(views);
+  view->render(views);
   deformer.finish();
   const std::optional<BodyContactSummary> c = deformer.contact(kSoftBall);
   EXPECT_TRUE(c.has_value());

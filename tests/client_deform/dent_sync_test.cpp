@@ -14,6 +14,7 @@
 #include "client/deform/room_deformer.hpp"
 #include "client/view/room_view.hpp"
 #include "common/deform/prop.hpp"
+#include "tests/client_deform/ball_views.hpp"
 
 namespace vistel {
 namespace {
@@ -21,27 +22,6 @@ namespace {
 constexpr float kClayRadius = 0.05f;
 constexpr std::uint32_t kSelfA = 4, kSelfB = 6, kPropId = 9, kPropView = 0x9FFFF;
 constexpr double kFrame = 1.0 / 60.0;
-
-std::shared_ptr<const AvatarModel> sphere(float stiffness, Elasticity elasticity) {
-  BallSpec spec;
-  spec.radius = kClayRadius;
-  spec.stiffness = stiffness;
-  spec.elasticity = elasticity;
-  Result<std::shared_ptr<const AvatarModel>> b = makeBallAvatar(spec);
-  EXPECT_TRUE(b.ok()) << (b.ok() ? "" : b.error().message);
-  return b.ok() ? *b : nullptr;
-}
-
-MemberView viewOf(std::uint32_t id, std::shared_ptr<const AvatarModel> avatar, const glm::vec3& at,
-                  bool is_self = false) {
-  MemberView v;
-  v.id = id;
-  v.avatar = std::move(avatar);
-  v.placement = glm::translate(glm::mat4(1.0f), at);
-  v.posture = restPosture(v.avatar->skeleton);
-  v.is_self = is_self;
-  return v;
-}
 
 // One site: a headless view, its deformer and its dent sync.
 struct Site {
@@ -51,14 +31,7 @@ struct Site {
   std::vector<MemberView> views;
   double t = 0.0;
 
-  Site() {
-    ViewOptions options;
-    options.headless = true;
-    options.worker_threads = 1;
-    Result<std::unique_ptr<RoomView>> v = RoomView::create(options);
-    EXPECT_TRUE(v.ok());
-    if (v) view = std::move(*v);
-  }
+  Site() : view(test::headlessView()) {}
   void frame() {
     EXPECT_TRUE(deformer.sync(views, *view).ok());
     EXPECT_TRUE(deformer.prepare(t).ok());
@@ -116,14 +89,14 @@ float largestDifference(const std::vector<glm::vec3>& a, const std::vector<glm::
 class DentSyncTest : public ::testing::Test {
  protected:
   DentSyncTest()
-      : clay_(sphere(3.0e4f, Elasticity::kPlastic)),
-        hand_(sphere(kRigidStiffness, Elasticity::kElastic)) {}
+      : clay_(test::ballAvatar(kClayRadius, 3.0e4f, Elasticity::kPlastic)),
+        hand_(test::ballAvatar(kClayRadius, kRigidStiffness)) {}
 
   // Site A's avatar (a rigid ball, "the hand") presses the clay ball 1 cm deep for a few
   // frames and lets go; every record A gives goes to `sent`.
   void pressAtA(Site& a, std::vector<OutgoingDents>& sent, std::vector<double>& sent_at) {
-    a.views = {viewOf(kSelfA, hand_, glm::vec3(2.0f * kClayRadius - 0.01f, 0, 0), true),
-               viewOf(kPropView, clay_, glm::vec3(0.0f))};
+    a.views = {test::ballView(kSelfA, hand_, glm::vec3(2.0f * kClayRadius - 0.01f, 0, 0), true),
+               test::ballView(kPropView, clay_, glm::vec3(0.0f))};
     const DentBody self{false, kSelfA, kSelfA};
     const std::vector<DentBody> props = {{true, kPropId, kPropView}};
     for (int k = 0; k < 90; ++k) {
@@ -165,8 +138,9 @@ TEST_F(DentSyncTest, ADentMadeAtOneSiteIsDrawnAtAnother) {
 
   // Site B saw no contact (its copy of A's hand is far away) and adopts the records.
   Site b;
-  b.views = {viewOf(kSelfB, hand_, glm::vec3(0, 0, 1), true),
-             viewOf(kSelfA, hand_, glm::vec3(1, 0, 0)), viewOf(kPropView, clay_, glm::vec3(0.0f))};
+  b.views = {test::ballView(kSelfB, hand_, glm::vec3(0, 0, 1), true),
+             test::ballView(kSelfA, hand_, glm::vec3(1, 0, 0)),
+             test::ballView(kPropView, clay_, glm::vec3(0.0f))};
   const DentBody self_b{false, kSelfB, kSelfB};
   b.frame();
   EXPECT_LT(deepest(b, *b.find(kPropView)), 1e-6f) << "no dent at B before the records";
@@ -181,7 +155,7 @@ TEST_F(DentSyncTest, ADentMadeAtOneSiteIsDrawnAtAnother) {
   EXPECT_EQ(b.sync.counters().adopted, sent.size());
 
   // B's scene rebuilt (a member joins): the dent stays.
-  b.views.push_back(viewOf(12, hand_, glm::vec3(-1, 0, 0)));
+  b.views.push_back(test::ballView(12, hand_, glm::vec3(-1, 0, 0)));
   b.frame();
   EXPECT_LT(largestDifference(a.drawn(kPropView), b.drawn(kPropView)), 2.0f * kDentQuantumM);
 }
@@ -195,12 +169,12 @@ TEST_F(DentSyncTest, ALateJoinerDrawsTheDentOnceTheBodyArrives) {
   // C joins: the server gives it the newest record before C draws the prop (its model is
   // not built yet): the record waits for the body.
   Site c;
-  c.views = {viewOf(kSelfB, hand_, glm::vec3(0, 0, 1), true)};
+  c.views = {test::ballView(kSelfB, hand_, glm::vec3(0, 0, 1), true)};
   c.frame();
   const DentBody self_c{false, kSelfB, kSelfB};
   ASSERT_TRUE(c.sync.receive(c.deformer, c.t, self_c, sent.back().body, sent.back().record).ok());
   EXPECT_EQ(c.deformer.pendingDents(), 1);
-  c.views.push_back(viewOf(kPropView, clay_, glm::vec3(0.0f)));
+  c.views.push_back(test::ballView(kPropView, clay_, glm::vec3(0.0f)));
   c.frame();
   EXPECT_EQ(c.deformer.pendingDents(), 0);
   EXPECT_LT(largestDifference(a.drawn(kPropView), c.drawn(kPropView)), 2.0f * kDentQuantumM);
@@ -218,8 +192,8 @@ TEST_F(DentSyncTest, ASiteKeepsWhatItSpeaksFor) {
   Site a;
   std::vector<OutgoingDents> sent;
   std::vector<double> sent_at;
-  a.views = {viewOf(kSelfA, hand_, glm::vec3(2.0f * kClayRadius - 0.01f, 0, 0), true),
-             viewOf(kPropView, clay_, glm::vec3(0.0f))};
+  a.views = {test::ballView(kSelfA, hand_, glm::vec3(2.0f * kClayRadius - 0.01f, 0, 0), true),
+             test::ballView(kPropView, clay_, glm::vec3(0.0f))};
   const DentBody self{false, kSelfA, kSelfA};
   const std::vector<DentBody> props = {{true, kPropId, kPropView}};
   for (int k = 0; k < 5; ++k) {

@@ -229,7 +229,8 @@ Capture captureSession(int steps) {
     now += 0.005;
     core.update(now);
     for (auto& c : clients) c->update(now);
-    // Postures from both at about 50 Hz, a ball from the other member after 0.3 s.
+    // Postures from both at about 50 Hz, a ball from the other member after 0.3 s, its dents
+    // after 0.6 s.
     if (step % 4 == 0) {
       const float angle = 0.05f * static_cast<float>(step);
       if (clients[0]->sendPosture(postureOf(ownAvatar().joints, angle), now)) {
@@ -242,6 +243,15 @@ Capture captureSession(int steps) {
     if (step == 90) {
       script.op(kBall);
       clients[0]->requestBall();
+    }
+    if (step == 120) {  // the other member's dents, relayed to us (SESSION.md §2.5)
+      net::BodyDents dents;
+      dents.body_id = clients[1]->memberId();
+      dents.server_time = now;
+      dents.record.vertex_count = 64;
+      dents.record.gaps = {2, 0, 5};
+      dents.record.depths = {10, 25, 3};
+      clients[1]->sendDents(dents);
     }
     pump();
     if (capture.welcomed_at == 0 && clients[0]->state() == net::SessionState::kLive) {
@@ -261,6 +271,7 @@ struct Outcome {
   std::size_t members = 0;
   std::size_t props = 0;
   std::uint64_t interactions = 0;  // lists received
+  std::uint64_t dents = 0;         // Dents received (well formed)
 };
 Outcome runScript(std::span<const std::uint8_t> bytes);
 
@@ -274,8 +285,9 @@ std::vector<fuzz::Seed> makeSeeds() {
   // The replay opens the recorded (sealed) datagrams: the other member's postures, the
   // ball and the contact lists all arrive.
   const Outcome replayed = runScript(full.script);
-  check(replayed.members == 2 && replayed.props >= 1 && replayed.interactions > 0,
-        "the seed session replays with its datagrams opened");
+  check(replayed.members == 2 && replayed.props >= 1 && replayed.interactions > 0 &&
+            replayed.dents == 1,
+        "the seed session replays with its datagrams opened and the other member's dents");
 
   // A refusal: the server's ErrorReply to a join of a protocol it does not speak.
   control::ServerMessage refusal;
@@ -417,7 +429,7 @@ Outcome runScript(std::span<const std::uint8_t> bytes) {
     sample(session, now, posture);
   }
   return {session.state(), session.members().size(), session.props().size(),
-          session.interactionsVersion()};
+          session.interactionsVersion(), session.stats().dents_received};
 }
 
 }  // namespace
