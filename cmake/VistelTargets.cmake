@@ -49,6 +49,17 @@ function(vistel_test name)
   add_executable(${name} ${sources})
   target_link_libraries(${name} PRIVATE ${ARG_DEPS} vistel_testsupport GTest::gtest GTest::gtest_main)
   vistel_warnings(${name})
+  # A test's own sources are glue around the code under test (GoogleTest macros, setup,
+  # checks); the libraries they link keep the build's optimisation. Optimising the glue
+  # was a third of a cold build on CI's two cores, so it gets -O1 in Release and -Og
+  # under the sanitizers (test_server's batch: 31 s at -O2, 22 s at -O1; test_deform's
+  # under ASan: 43 s at -O1, 25 s at -Og, 22 s at -O0, but -O0 ran its test loops 1.5x
+  # slower).
+  if(VISTEL_SANITIZE)
+    target_compile_options(${name} PRIVATE -Og)
+  else()
+    target_compile_options(${name} PRIVATE $<$<CONFIG:Release>:-O1>)
+  endif()
   if(NOT ARG_LABELS)
     set(ARG_LABELS unit)
   endif()
