@@ -724,7 +724,8 @@ int main(int argc, char** argv) {
         driver->takeDents(dents_in);
         for (const BodyDents& d : dents_in) {
           const DentBody body{d.prop, d.body_id, d.prop ? propViewId(d.body_id) : d.body_id};
-          if (Status st = dent_sync.receive(*deformer, elapsed, self, body, d.record); !st) {
+          const double age = std::max(0.0, frame_server_now - d.server_time);
+          if (Status st = dent_sync.receive(*deformer, elapsed, self, body, d.record, age); !st) {
             spdlog::warn("{}", st.error().message);
           }
         }

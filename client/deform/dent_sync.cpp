@@ -54,13 +54,13 @@ std::span<const OutgoingDents> DentSync::collect(const RoomDeformer& deformer, d
 }
 
 Status DentSync::receive(RoomDeformer& deformer, double now, const DentBody& self,
-                         const DentBody& body, const DentRecord& record) {
+                         const DentBody& body, const DentRecord& record, double age_s) {
   Tracked& t = tracked(body);
   if (ours(t, self, now)) {
     ++counters_.skipped;
     return {};
   }
-  if (Status st = deformer.adoptDents(body.view_id, record); !st) {
+  if (Status st = deformer.adoptDents(body.view_id, record, age_s); !st) {
     ++counters_.failed;
     return fail("dents of {} {:#x}: {}", body.prop ? "prop" : "member", body.id,
                 st.error().message);

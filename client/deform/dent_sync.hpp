@@ -59,10 +59,11 @@ class DentSync {
   // the drawn props. now: seconds, any monotonic clock. Valid until the next call.
   std::span<const OutgoingDents> collect(const RoomDeformer& deformer, double now,
                                          const DentBody& self, std::span<const DentBody> props);
-  // Another site's record for `body` (relayed by the server), given our avatar `self`.
-  // Skipped (ok) for a body we speak for; else adopted. The error names the body.
+  // Another site's record for `body` (relayed by the server), sampled age_s ago (by the
+  // server clock; a viscoelastic dent recovers over it), given our avatar `self`. Skipped
+  // (ok) for a body we speak for; else adopted. The error names the body.
   Status receive(RoomDeformer& deformer, double now, const DentBody& self, const DentBody& body,
-                 const DentRecord& record);
+                 const DentRecord& record, double age_s = 0.0);
 
   const DentSyncCounters& counters() const { return counters_; }
   // "dent_sync": {"sent": n, "adopted": n, "skipped": n, "failed": n} (a JSON member).

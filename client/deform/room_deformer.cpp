@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <utility>
 
 namespace vistel {
@@ -203,15 +204,16 @@ Status RoomDeformer::sync(std::span<const MemberView> views, RoomView& view) {
   // Dents waiting for their bodies: applied once the view is a body, dropped once it is not
   // drawn any more. (A failure is returned after the frame's work.)
   Status dents_status;
-  std::erase_if(pending_dents_, [&](std::pair<std::uint32_t, DentRecord>& p) {
-    if (const int body = bodyOf(p.first); body >= 0) {
-      if (Status st = applyDents(body, p.second); !st && dents_status) {
-        dents_status = fail("dents for view {:#x}: {}", p.first, st.error().message);
+  std::erase_if(pending_dents_, [&](const PendingDents& p) {
+    if (const int body = bodyOf(p.view_id); body >= 0) {
+      const double age = p.age_s + std::max(0.0, last_time_ - p.adopted_at);
+      if (Status st = applyDents(body, p.record, age); !st && dents_status) {
+        dents_status = fail("dents for view {:#x}: {}", p.view_id, st.error().message);
       }
       return true;
     }
     return std::none_of(views.begin(), views.end(),
-                        [&](const MemberView& v) { return v.id == p.first; });
+                        [&](const MemberView& v) { return v.id == p.view_id; });
   });
   std::optional<DeformScene>& scene = shared_->scene;
   if (!scene) return dents_status;
@@ -227,6 +229,7 @@ Status RoomDeformer::sync(std::span<const MemberView> views, RoomView& view) {
 
 Status RoomDeformer::prepare(double time, const InteractionList* received) {
   const Clock::time_point start = Clock::now();
+  last_time_ = time;
   stats_ = DeformFrameStats{};
   shared_->deformed.store(0, std::memory_order_relaxed);
   shared_->held.store(0, std::memory_order_relaxed);
@@ -313,30 +316,31 @@ bool RoomDeformer::recordDents(std::uint32_t view_id, DentRecord& out) const {
   return true;
 }
 
-Status RoomDeformer::applyDents(int body, const DentRecord& record) {
+Status RoomDeformer::applyDents(int body, const DentRecord& record, double age_s) {
   const DeformState* state = shared_->scene->deformState(body);
   if (state == nullptr) return fail("body {} does not deform", body);
   dent_memory_.resize(state->memory.size());
   if (Status st = vistel::applyDents(record, dent_memory_); !st) return st;
-  if (!shared_->scene->adoptMemory(body, dent_memory_)) {
-    return fail("body {} refused the memory", body);  // (sizes checked above)
+  if (!shared_->scene->adoptMemory(body, dent_memory_, static_cast<float>(age_s))) {
+    return fail("body {} refused the memory", body);  // (sizes and age checked before)
   }
   return {};
 }
 
-Status RoomDeformer::adoptDents(std::uint32_t view_id, const DentRecord& record) {
+Status RoomDeformer::adoptDents(std::uint32_t view_id, const DentRecord& record, double age_s) {
+  if (!(age_s >= 0.0) || !std::isfinite(age_s)) return fail("dents: an age of {} s", age_s);
   if (Status st = checkDents(record.vertex_count, record.gaps, record.depths, record.gaps.size());
       !st) {
     return st;
   }
-  if (const int body = bodyOf(view_id); body >= 0) return applyDents(body, record);
+  if (const int body = bodyOf(view_id); body >= 0) return applyDents(body, record, age_s);
   auto it = std::find_if(pending_dents_.begin(), pending_dents_.end(),
-                         [&](const auto& p) { return p.first == view_id; });
-  if (it == pending_dents_.end()) {
-    pending_dents_.emplace_back(view_id, record);
-  } else {
-    it->second = record;
-  }
+                         [&](const PendingDents& p) { return p.view_id == view_id; });
+  if (it == pending_dents_.end()) it = pending_dents_.insert(pending_dents_.end(), PendingDents{});
+  it->view_id = view_id;
+  it->record = record;
+  it->age_s = age_s;
+  it->adopted_at = last_time_;
   return {};
 }
 

@@ -121,11 +121,12 @@ class RoomDeformer {
   // A view's body's elastic memory (dents) as a record; false when it is not a body that
   // deforms. Call between frames (after finish(), before the next sync()).
   bool recordDents(std::uint32_t view_id, DentRecord& out) const;
-  // Another site's record for a view's body replaces its memory, now when the view is a body
-  // of this scene, else when it becomes one (the newest record per view waits while that view
-  // is drawn). Fails on a malformed record, or one for another vertex count than the body's
-  // skin. Call between frames.
-  Status adoptDents(std::uint32_t view_id, const DentRecord& record);
+  // Another site's record for a view's body, sampled age_s ago, replaces its memory, now when
+  // the view is a body of this scene, else when it becomes one (the newest record per view
+  // waits while that view is drawn, and ages by the prepare() times in between); viscoelastic
+  // dents recover over the age (adoptElasticMemory). Fails on a malformed record, one for
+  // another vertex count than the body's skin, or a negative age. Call between frames.
+  Status adoptDents(std::uint32_t view_id, const DentRecord& record, double age_s = 0.0);
   // Records waiting for their views to become bodies.
   int pendingDents() const { return static_cast<int>(pending_dents_.size()); }
   // Whether the bodies of two views were in contact this frame (either measured it; valid
@@ -160,8 +161,8 @@ class RoomDeformer {
   };
 
   Status rebuild(std::span<const MemberView> views, RoomView& view);
-  // Writes a record into a body's memory.
-  Status applyDents(int body, const DentRecord& record);
+  // Writes a record, sampled age_s ago, into a body's memory.
+  Status applyDents(int body, const DentRecord& record, double age_s);
 
   DeformOptions options_;
   std::shared_ptr<Shared> shared_;
@@ -183,9 +184,16 @@ class RoomDeformer {
   std::vector<DeformTier> tiers_;           // (nbody) this frame
   std::vector<DeformTier> previous_tiers_;  // (nbody) last frame (empty after a rebuild)
   DeformFrameStats stats_;
-  // Dents for views that are not bodies yet (view id, record), and scratch.
-  std::vector<std::pair<std::uint32_t, DentRecord>> pending_dents_;
+  // Dents for views that are not bodies yet, and scratch.
+  struct PendingDents {
+    std::uint32_t view_id = 0;
+    DentRecord record;
+    double age_s = 0.0;       // when adopted
+    double adopted_at = 0.0;  // last_time_ then
+  };
+  std::vector<PendingDents> pending_dents_;
   std::vector<float> dent_memory_;
+  double last_time_ = 0.0;  // the last prepare()'s time
 };
 
 }  // namespace vistel

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "common/deform/collision_terms.hpp"
 #include "common/deform/contact_forces.hpp"
 #include "common/deform/deform_scratch.hpp"
 #include "common/deform/face_orientation.hpp"
@@ -231,18 +232,24 @@ bool carryDeformState(const DeformState& from, DeformState& to) {
 }
 
 bool adoptElasticMemory(const ImplicitModel& model, std::span<const float> memory,
-                        DeformState& state) {
+                        DeformState& state, float age_s) {
   const std::size_t nv = state.memory.size();
   if (memory.size() != nv || model.calibration.prims.size() != nv) return false;
+  if (!(age_s >= 0.0f) || !std::isfinite(age_s)) return false;
   for (const float m : memory) {
     if (!(m <= 0.0f) || !std::isfinite(m)) return false;
   }
   for (std::size_t v = 0; v < nv; ++v) {
     const std::int16_t p0 = model.calibration.prims[v][0];
-    const bool inelastic =
-        p0 >= 0 &&
-        model.primitives.items[static_cast<std::size_t>(p0)].elasticity != Elasticity::kElastic;
-    state.memory[v] = inelastic ? memory[v] : 0.0f;
+    if (p0 < 0) {
+      state.memory[v] = 0.0f;
+      continue;
+    }
+    const Primitive& own = model.primitives.items[static_cast<std::size_t>(p0)];
+    state.memory[v] = own.elasticity == Elasticity::kElastic ? 0.0f
+                      : age_s > 0.0f ? updateElasticMemory(own.elasticity, memory[v], 0.0f, age_s,
+                                                           own.time_constant)
+                                     : memory[v];
   }
   return true;
 }

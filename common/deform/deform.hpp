@@ -266,10 +266,13 @@ bool carryDeformState(const DeformState& from, DeformState& to);
 // Another site's elastic memory for the same body (one entry per vertex, metres <= 0; e.g.
 // a dent record applied, common/scene/dent_record.hpp) replaces the state's: the body then
 // draws that site's dents, and its own plastic or viscoelastic behaviour goes on from them.
-// A vertex whose own primitive is elastic keeps none (it would never recover). Returns
-// false, changing nothing, when the vertex counts differ or an entry is not finite and <= 0.
+// A vertex whose own primitive is elastic keeps none (it would never recover). age_s: how
+// long ago the memory was sampled; a viscoelastic vertex recovers over it as without contact
+// (updateElasticMemory), so a late copy matches the site that made it. Returns false,
+// changing nothing, when the vertex counts differ, an entry is not finite and <= 0, or the
+// age is negative or not finite.
 bool adoptElasticMemory(const ImplicitModel& model, std::span<const float> memory,
-                        DeformState& state);
+                        DeformState& state, float age_s = 0.0f);
 
 // Steps 2 and 3 for body `self` of the scene `bodies` (its posed primitives must be
 // bodies[self].posed), given Step 1's interaction list over the same bodies. Writes

@@ -411,9 +411,9 @@ bool DeformScene::carryState(int index, const DeformState& from) {
   SceneSlot& b = impl_->bodies[static_cast<std::size_t>(index)];
   return b.deforms && carryDeformState(from, b.state);
 }
-bool DeformScene::adoptMemory(int index, std::span<const float> memory) {
+bool DeformScene::adoptMemory(int index, std::span<const float> memory, float age_s) {
   SceneSlot& b = impl_->bodies[static_cast<std::size_t>(index)];
-  return b.deforms && adoptElasticMemory(*b.model, memory, b.state);
+  return b.deforms && adoptElasticMemory(*b.model, memory, b.state, age_s);
 }
 const SkinningRig& DeformScene::skinningRig(int index) const {
   return impl_->bodies[static_cast<std::size_t>(index)].rig;

@@ -175,9 +175,9 @@ class DeformScene {
   // Carries a body's state over from a scene this one replaces (see carryDeformState):
   // false when the body does not deform or the state is another mesh's.
   bool carryState(int index, const DeformState& from);
-  // Replaces a body's elastic memory with another site's (see adoptElasticMemory): false
-  // when the body does not deform or the memory is another mesh's.
-  bool adoptMemory(int index, std::span<const float> memory);
+  // Replaces a body's elastic memory with another site's, sampled age_s ago (see
+  // adoptElasticMemory): false when the body does not deform or the memory is another mesh's.
+  bool adoptMemory(int index, std::span<const float> memory, float age_s = 0.0f);
   // The body's rigid component as create() built it for options.skinning: the method that
   // runs (rig.method) and why it differs from the requested one (rig.warning, e.g. a ball
   // or a skeleton without a spine under kSpineFfd).

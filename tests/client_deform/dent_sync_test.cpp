@@ -4,6 +4,7 @@
 // scene; a site keeps what it speaks for (its own avatar, a prop it is touching); records
 // go out only when they change, at most once per interval.
 #include <algorithm>
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -186,6 +187,45 @@ TEST_F(DentSyncTest, ALateJoinerDrawsTheDentOnceTheBodyArrives) {
   EXPECT_EQ(c.deformer.pendingDents(), 1);
   c.frame();
   EXPECT_EQ(c.deformer.pendingDents(), 0);
+}
+
+// A viscoelastic dent adopted late has recovered over the record's age as it has at the site
+// that made it: a record 0.5 s old (the ball's time constant) arrives at e^-1 of its depth.
+TEST_F(DentSyncTest, AViscoelasticDentRecoversOverTheRecordsAge) {
+  const auto putty = test::ballAvatar(kClayRadius, 3.0e4f, Elasticity::kViscoelastic);
+  ASSERT_NE(putty, nullptr);
+  const float tau = putty->implicit->primitives.items[0].time_constant;
+  Site a;
+  a.views = {test::ballView(kSelfA, hand_, glm::vec3(2.0f * kClayRadius - 0.01f, 0, 0), true),
+             test::ballView(kPropView, putty, glm::vec3(0.0f))};
+  for (int k = 0; k < 5; ++k) a.frame();
+  DentRecord pressed;
+  ASSERT_TRUE(a.deformer.recordDents(kPropView, pressed));
+  ASSERT_GT(dentCount(pressed), 10u);
+
+  Site c;
+  c.views = {test::ballView(kSelfB, hand_, glm::vec3(0, 0, 1), true),
+             test::ballView(kPropView, putty, glm::vec3(0.0f))};
+  c.frame();
+  const DentBody self_c{false, kSelfB, kSelfB};
+  ASSERT_TRUE(
+      c.sync.receive(c.deformer, c.t, self_c, {true, kPropId, kPropView}, pressed, tau).ok());
+  DentRecord adopted;
+  ASSERT_TRUE(c.deformer.recordDents(kPropView, adopted));
+  std::vector<float> made(pressed.vertex_count), got(adopted.vertex_count);
+  ASSERT_TRUE(applyDents(pressed, made).ok());
+  ASSERT_TRUE(applyDents(adopted, got).ok());
+  float deepest_made = 0.0f, deepest_got = 0.0f;
+  for (std::size_t v = 0; v < made.size(); ++v) {
+    EXPECT_NEAR(got[v], made[v] * std::exp(-1.0f), 1.5f * kDentQuantumM) << v;
+    deepest_made = std::min(deepest_made, made[v]);
+    deepest_got = std::min(deepest_got, got[v]);
+  }
+  std::printf("viscoelastic dent %.2f mm, adopted %.2f s late: %.2f mm (e^-1 of it: %.2f mm)\n",
+              -deepest_made * 1e3f, tau, -deepest_got * 1e3f,
+              -deepest_made * 1e3f * std::exp(-1.0f));
+  // A negative age is refused.
+  EXPECT_FALSE(c.deformer.adoptDents(kPropView, pressed, -1.0));
 }
 
 TEST_F(DentSyncTest, ASiteKeepsWhatItSpeaksFor) {
