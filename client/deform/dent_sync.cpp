@@ -39,10 +39,12 @@ std::span<const OutgoingDents> DentSync::collect(const RoomDeformer& deformer, d
                                                  const DentBody& self,
                                                  std::span<const DentBody> props) {
   out_count_ = 0;
-  // Props no longer drawn are forgotten.
+  // Props no longer drawn are forgotten, and avatars but ours (another member's, or ours
+  // under an id a reconnection replaced): nothing is sent for them.
   std::erase_if(tracked_, [&](const Tracked& t) {
-    return t.prop && std::none_of(props.begin(), props.end(),
-                                  [&](const DentBody& p) { return p.id == t.id; });
+    if (!t.prop) return t.id != self.id;
+    return std::none_of(props.begin(), props.end(),
+                        [&](const DentBody& p) { return p.id == t.id; });
   });
   if (self.id != 0) offer(deformer, now, self, tracked(self));
   for (const DentBody& p : props) {
