@@ -22,16 +22,18 @@ bool DentSync::ours(const Tracked& t, const DentBody& self, double now) const {
 }
 
 void DentSync::offer(const RoomDeformer& deformer, double now, const DentBody& body, Tracked& t) {
+  // The body's memory is read (O(vertices)) at most once per interval, so records also go
+  // at most once per interval.
+  if (now - t.checked_at < settings_.min_interval_s) return;
+  t.checked_at = now;
   if (!deformer.recordDents(body.view_id, scratch_)) return;  // not a deforming body
   if (t.have_last ? scratch_ == t.last : scratch_.depths.empty()) return;
-  if (now - t.sent_at < settings_.min_interval_s) return;  // later: it is still different
   if (out_count_ == out_.size()) out_.emplace_back();
   OutgoingDents& o = out_[out_count_++];
   o.body = body;
   o.record = scratch_;
   t.last = scratch_;
   t.have_last = true;
-  t.sent_at = now;
   ++counters_.sent;
 }
 

@@ -4,9 +4,10 @@
 //
 // A site speaks for its own avatar always, and for a prop while its own avatar touches it
 // and for linger_s after (the dent's final shape; a viscoelastic one's recovery then runs
-// alike everywhere). For each body it speaks for, collect() gives the body's record when it
-// differs from the last one sent for it, at most once per min_interval_s (the server ignores
-// faster ones: [limits] dents_interval_s). A body that never had a dent sends nothing.
+// alike everywhere). For each body it speaks for, collect() reads its memory once per
+// min_interval_s and gives the record when it differs from the last one sent for it (so at
+// most once per interval: the server ignores faster ones, [limits] dents_interval_s). A body
+// that never had a dent sends nothing.
 //
 // receive() replaces a body's memory with another site's record (RoomDeformer::adoptDents),
 // except for a body this site speaks for at that moment: there its own contact is newer.
@@ -75,7 +76,7 @@ class DentSync {
     std::uint32_t id = 0;
     DentRecord last;             // last record sent or adopted
     bool have_last = false;      // ... there was one
-    double sent_at = -1e300;     // when collect() last gave one
+    double checked_at = -1e300;  // when offer() last read its memory
     double touched_at = -1e300;  // a prop: when our avatar last touched it
   };
   Tracked& tracked(const DentBody& body);

@@ -228,8 +228,9 @@ class ClientSession {
   // and places it). False, nothing sent, before the Welcome or after closing.
   bool requestBall();
   // Sends a body's dents (Dents over TCP): only in kLive, and only a well-formed record with a
-  // finite time (else false, nothing sent). The server relays it to the room and keeps the newest per
-  // body for later joiners; it ignores one faster than its dents_interval_s per body.
+  // finite time (else false, nothing sent). The server relays it to the room and keeps the
+  // newest per body for later joiners; it ignores one faster than its dents_interval_s per
+  // body.
   bool sendDents(const BodyDents& dents);
   // Dents received since the caller last took them: the newest per body, in arrival order
   // of the bodies. Take them by swapping or clearing.
