@@ -373,6 +373,7 @@ void Lobby::handleJoin(ConnId conn, Connection& c, const control::Join& join, do
   m.avatar_hash = join.avatar_hash();
   m.avatar_size = join.avatar_size();
   m.joined_at = now;
+  m.dents_bytes = TokenBucket(config_.dents_bytes_per_s, 4.0 * config_.dents_bytes_per_s, now);
   auto free_seat = std::find(room->seat_taken.begin(), room->seat_taken.end(), false);
   if (preferred_seat >= 0 && static_cast<std::size_t>(preferred_seat) < room->seat_taken.size() &&
       !room->seat_taken[static_cast<std::size_t>(preferred_seat)]) {

@@ -47,8 +47,9 @@
 // prop of its room is checked (common/scene/dent_record.hpp, [limits] max_dent_vertices),
 // kept as the body's newest and relayed to the rest of the room; a joiner gets every one
 // the room keeps after its Roster. Dents for another member's avatar or an unknown body,
-// malformed ones, and ones faster than dents_interval_s per body and sender are ignored
-// (counted, logged; the sender stays). A body's dents go with it (member left, prop
+// malformed ones, ones faster than dents_interval_s per body and sender, and ones past the
+// sender's dents_bytes_per_s (each is relayed to the whole room) are ignored (counted,
+// logged; the sender stays). A body's dents go with it (member left, prop
 // removed), so a room keeps at most one message per body.
 #pragma once
 
@@ -187,6 +188,7 @@ class Lobby {
     std::uint64_t challenge = 0;  // ... and its cookie (0: none)
     double last_spawn = -1e300;
     std::vector<std::pair<std::uint64_t, double>> dents_sent_at;  // (body key, lobby clock)
+    TokenBucket dents_bytes;                                      // Dents bytes relayed
     double joined_at = 0.0;                                       // lobby clock
   };
   struct PropRecord {

@@ -2,7 +2,8 @@
 // avatar or a prop of its room is checked, kept as that body's newest and relayed to the
 // rest of the room; a joiner gets what the room keeps. What is ignored is counted and
 // logged under a reason ("dents not shared", "dents for another body", "malformed dents",
-// "dents too often") and the sender stays: a client with a bug in its dents still meets.
+// "dents too often", "dents over the byte rate") and the sender stays: a client with a bug
+// in its dents still meets.
 #include <algorithm>
 #include <cmath>
 #include <span>
@@ -65,6 +66,13 @@ void Lobby::handleDents(Connection& c, const control::Dents& dents, double now, 
     ignore("dents too often",
            fmt::format("{:.3f} s after the last, faster than dents_interval_s {}",
                        now - sent->second, config_.dents_interval_s));
+    return;
+  }
+  // How much: each message goes to the whole room.
+  const auto bytes = static_cast<double>(dents.ByteSizeLong());
+  if (!m->dents_bytes.take(now, bytes)) {
+    ignore("dents over the byte rate", fmt::format("{:.0f} bytes past dents_bytes_per_s {:.0f}",
+                                                   bytes, config_.dents_bytes_per_s));
     return;
   }
   if (sent == m->dents_sent_at.end()) {

@@ -124,6 +124,7 @@ Result<ServerConfig> parseServerConfig(std::string_view toml_text, std::string_v
   VISTEL_CONFIG_TRY(limits.number("max_primitive_extent_m", c.max_primitive_extent_m, 0.01, 100));
   VISTEL_CONFIG_TRY(limits.number("max_dent_vertices", c.max_dent_vertices, 0, 1 << 24));
   VISTEL_CONFIG_TRY(limits.number("dents_interval_s", c.dents_interval_s, 0, 60));
+  VISTEL_CONFIG_TRY(limits.number("dents_bytes_per_s", c.dents_bytes_per_s, 256, 1e9));
   VISTEL_CONFIG_TRY(limits.checkUnknown());
   if (c.max_queued_bytes_per_connection < c.max_avatar_bytes + c.max_frame_bytes) {
     return fail(

@@ -72,10 +72,12 @@ struct ServerConfig {
   int control_burst = 100;              // sustained, and in a burst (avatar chunks are free)
   int max_primitives_per_avatar = 64;   // collision model limits checked at upload
   float max_primitive_extent_m = 2.0f;  // largest side of a primitive's field box at rest
-  // Dents (proto/SESSION.md §2.5): the most dented vertices one Dents message may carry, and
-  // the shortest time between two of one body from one member (faster ones are ignored).
+  // Dents (proto/SESSION.md §2.5): the most dented vertices one Dents message may carry, the
+  // shortest time between two of one body from one member, and the bytes of Dents a member
+  // may have relayed per second (bursts of 4 s worth); what goes past is ignored.
   int max_dent_vertices = 65536;
   double dents_interval_s = 0.2;
+  double dents_bytes_per_s = 65536.0;
   // [room]
   SeatLayout seat_layout;  // rings of seats about the centre (seat_radius_m, seat_spacing_m,
                            // ring_gap_m)

@@ -165,6 +165,38 @@ TEST_F(SharedDents, WhatTheServerIgnoresLeavesTheSenderInTheRoom) {
   EXPECT_EQ(net_.server().lobby().memberCount(), 2);
 }
 
+// Each Dents goes to the whole room, so a member's relayed bytes are budgeted: a token bucket
+// of dents_bytes_per_s, bursts of 4 s worth.
+TEST_F(SharedDents, BytesPastTheBudgetAreIgnored) {
+  server::ServerConfig c;
+  c.dents_bytes_per_s = 256.0;  // bursts of 1024 bytes
+  SimNetwork net(c, 5);
+  std::vector<std::size_t> members;
+  for (const char* name : {"a", "b"}) {
+    members.push_back(net.addClient(sessionFor("r", name, avatar_, 5)));
+    net.connect(members.back());
+    net.advance(0.5);
+  }
+  const std::size_t a = members[0], b = members[1];
+  BodyDents big;
+  big.body_id = net.session(a).memberId();
+  big.server_time = 1.0;
+  big.record.vertex_count = 1000;
+  big.record.gaps.assign(400, 0);    // 400 vertices in a row: a byte each
+  big.record.depths.assign(400, 5);  // ... and a byte each
+  ASSERT_TRUE(net.session(a).sendDents(big));
+  net.advance(0.3);
+  ASSERT_TRUE(net.session(a).sendDents(big));  // ~820 bytes again, 0.3 s later: over
+  net.advance(0.1);
+  EXPECT_EQ(net.server().lobby().drops().count("dents over the byte rate"), 1u);
+  EXPECT_EQ(net.session(b).stats().dents_received, 1u);
+  net.advance(3.0);  // refilled
+  ASSERT_TRUE(net.session(a).sendDents(big));
+  net.advance(0.1);
+  EXPECT_EQ(net.session(b).stats().dents_received, 2u);
+  EXPECT_EQ(net.session(a).state(), SessionState::kLive) << net.session(a).error();
+}
+
 TEST_F(SharedDents, ASpawnedPropsDentsGoWithIt) {
   // max 1 prop per room and no config props: a second spawn replaces the first.
   server::ServerConfig c;
