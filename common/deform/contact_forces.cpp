@@ -179,7 +179,6 @@ void passContacts(DeformFrame& fr) {
   const auto nbody = static_cast<int>(fr.bodies.size());
   if (fr.self < 0 || fr.self >= nbody) return;
   const BodyView& me = fr.bodies[static_cast<std::size_t>(fr.self)];
-  bool scaled = false;
   for (BodyContact& bc : st.contacts) {
     if (bc.partner == fr.self || bc.partner < 0 || bc.partner >= nbody) continue;
     const BodyView& other = fr.bodies[static_cast<std::size_t>(bc.partner)];
@@ -187,22 +186,10 @@ void passContacts(DeformFrame& fr) {
         separationScale(me.restitution, other.restitution, me.velocity, other.velocity, -bc.force);
     if (s == 1.0f) continue;
     bc.force *= static_cast<double>(s);
-    scaled = true;
+    forEachContactVertex([&](std::uint32_t v) {
+      if (st.contact_body[v] == bc.partner) st.pressure[v] *= s;
+    });
   }
-  if (!scaled) return;
-  forEachContactVertex([&](std::uint32_t v) {
-    const int partner = st.contact_body[v];
-    if (partner == fr.self || partner < 0 || partner >= nbody) return;
-    const BodyView& other = fr.bodies[static_cast<std::size_t>(partner)];
-    const BodyContact* bc = nullptr;
-    for (const BodyContact& c : st.contacts) {
-      if (c.partner == partner) bc = &c;
-    }
-    if (bc == nullptr) return;
-    // (the force was scaled above; its direction is the law's)
-    st.pressure[v] *=
-        separationScale(me.restitution, other.restitution, me.velocity, other.velocity, -bc->force);
-  });
 }
 
 void combineContacts(std::span<const DeformState* const> states, std::vector<PairContact>& out) {
