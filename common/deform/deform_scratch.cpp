@@ -123,6 +123,11 @@ void initDeformScratch(const ImplicitModel& model, std::span<const std::uint32_t
   sc.any_inelastic =
       std::any_of(model.primitives.items.begin(), model.primitives.items.end(),
                   [](const Primitive& p) { return p.elasticity != Elasticity::kElastic; });
+  sc.adopted.resize(nprim);
+  for (std::size_t i = 0; i < nprim; ++i) {
+    const std::string& name = model.primitives.items[i].name;
+    sc.adopted[i] = primitivePart(name) != name ? 1 : 0;
+  }
   sc.fixed_kind.resize(nv);
   for (std::size_t v = 0; v < nv; ++v) {
     sc.fixed_kind[v] =
@@ -234,6 +239,7 @@ void buildColliders(DeformFrame& fr, const InteractionList& list) {
   // Entries are sorted by own primitive: count and fill in one pass.
   for (const Interaction& e : entries) {
     if (e.prim_a >= nprim) continue;
+    if (e.body_b == fr.self && e.prim_b < nprim && sc.adopted[e.prim_b] != 0) continue;
     ++sc.prim_collider_offsets[e.prim_a + 1u];
     sc.prim_colliders.push_back(static_cast<std::uint16_t>(find_or_add(e.body_b, e.prim_b)));
   }

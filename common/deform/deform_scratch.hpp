@@ -62,7 +62,12 @@ struct DeformScratch {
   std::vector<std::uint16_t> prim_colliders;
   std::vector<std::int32_t> always_collider;  // (nprim) collider of an always-pair prim
   std::vector<std::int16_t> always_prims;     // prims named by kPairAlways pairs
-  std::vector<std::uint32_t> vf_offsets;      // vertex -> incident faces (nvert + 1)
+  // (nprim) 1: a primitive the builder made for free vertices (adoptFreeVertices; its name
+  // is "<part>/<joint>"). Within its own body it is no primitive's collider, and its
+  // vertices take an own-body partner's whole contact (as free vertices do): self-contact
+  // stays as it was before adoption, at its cost; other bodies meet it as any primitive.
+  std::vector<std::uint8_t> adopted;
+  std::vector<std::uint32_t> vf_offsets;  // vertex -> incident faces (nvert + 1)
   std::vector<std::uint32_t> vf_faces;
   std::vector<std::uint32_t> face_vertices;  // the triangles (3 * ntri)
   // Vertex patches (pass A culls colliders per patch): vertices sharing their defining

@@ -168,8 +168,9 @@ Status validateCalibration(const Calibration& c, const PrimitiveSet& s, int vert
       return fail("calibration: joint vertex {} lacks its two limbs", v);
     }
     if (!finitePositive(c.w[v])) return fail("calibration: vertex {} weight not positive", v);
-    if (c.rigid[v] > kRigidInner ||
-        (c.rigid[v] == kRigidLimb && (c.vertex_class[v] != VertexClass::kLimb || p[3] >= 0))) {
+    if (c.rigid[v] > kRigidUntouched ||
+        ((c.rigid[v] == kRigidLimb || c.rigid[v] == kRigidUntouched) &&
+         (c.vertex_class[v] != VertexClass::kLimb || p[3] >= 0))) {
       return fail("calibration: vertex {} rigid flag invalid", v);
     }
     if (c.rigid[v] == kRigidInner &&

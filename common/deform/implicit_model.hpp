@@ -160,9 +160,13 @@ struct VertexPair {
 
 // Calibration::rigid values.
 inline constexpr std::uint8_t kRigidLimb = 1;
-inline constexpr std::uint8_t kRigidInner = 2;  // a free vertex with no primitive and no pair:
-                                                // carried by its skinning alone, never
-                                                // deformed, never in contact
+inline constexpr std::uint8_t kRigidInner = 2;      // a free vertex with no primitive and no pair:
+                                                    // carried by its skinning alone, never
+                                                    // deformed, never in contact
+inline constexpr std::uint8_t kRigidUntouched = 3;  // a limb vertex of a primitive of its own
+                                                    // (adoptFreeVertices: fingers, toes...):
+                                                    // its field serves contact; untouched,
+                                                    // it keeps its skinned position
 
 struct Calibration {
   std::vector<VertexClass> vertex_class;           // (nvert)
@@ -174,7 +178,8 @@ struct Calibration {
                                                    // skinned entirely by its primitive's
                                                    // bone, so D_v cannot change while
                                                    // untouched; kRigidInner: an inner
-                                                   // layer (inner_layers.hpp); else 0
+                                                   // layer (inner_layers.hpp);
+                                                   // kRigidUntouched: see there; else 0
   std::vector<float> own_weight;                   // (nvert, or empty: all 1) the share of
                                                    // the vertex's skin weight carried by
                                                    // its own primitives' bones (see

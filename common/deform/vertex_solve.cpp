@@ -123,6 +123,7 @@ void gatherOwn(const DeformFrame& fr, int v, VertexProblem& vp) {
   vp.diff_exponent = m.primitives.diff_exponent;
   vp.p0 = fr.in->rigid_positions[vi];
   vp.p0_rigid = vp.cls == VertexClass::kFree;
+  vp.yields_own = pr[0] >= 0 && fr.sc->adopted[static_cast<std::size_t>(pr[0])] != 0;
   vp.n0 = fr.in->rigid_normals[vi];
   vp.anchor = vp.p0;
   vp.width = m.primitives.propagation_width;
@@ -170,9 +171,11 @@ void gatherOwn(const DeformFrame& fr, int v, VertexProblem& vp) {
     for (int k = 0; k < 4 && vp.lanes != nullptr; ++k) {
       if (vp.own[k] == cd.prim) cd.lane = k;
     }
-    // Relative deformability (a free vertex takes the whole contact of a partner it yields to).
+    // Relative deformability (a free vertex takes the whole contact of a partner it yields to;
+    // so does an adopted one against its own body, see DeformScratch::adopted).
     const PartnerShare ps =
-        partnerShare(k_self, col.posed->stiffness, vp.cls == VertexClass::kFree);
+        partnerShare(k_self, col.posed->stiffness,
+                     vp.cls == VertexClass::kFree || (vp.yields_own && col.body == fr.self));
     cd.share = ps.share;
     cd.hard = ps.hard;
     cd.rho = ps.rho;
@@ -193,6 +196,26 @@ void gatherOwn(const DeformFrame& fr, int v, VertexProblem& vp) {
     if (cd.bulge > 0.0f || cs.reach >= -kContactTolerance) ++kept;
   }
   vp.ncand = kept;
+}
+
+// The limit of relative deformability where the vertex's own field cannot answer a partner:
+// every soft partner the vertex yields to (share > 0) becomes a hard constraint, as for a
+// free vertex (partnerShare), so the vertex ends on that partner's skin. Returns whether any
+// changed (and then forgets the cached evaluation points).
+bool yieldWhole(VertexProblem& vp) {
+  bool changed = false;
+  for (int i = 0; i < vp.ncand; ++i) {
+    Candidate& c = vp.cand[i];
+    if (c.hard || !(c.share > 0.0f)) continue;
+    c.hard = true;
+    c.rho = 0.0f;
+    changed = true;
+  }
+  if (changed) {
+    vp.last_point = glm::vec3(NAN);
+    vp.hard_point = glm::vec3(NAN);
+  }
+  return changed;
 }
 
 // Own part and cached candidates of vertex v.
@@ -604,8 +627,10 @@ void passSolve(DeformFrame& fr, int first, int last, DeformCounters& cnt) {
     }
     // A free vertex's own equation is the plane through its rigid position along its normal:
     // with no soft term (every candidate a hard constraint without a bulge) its root is the
-    // rigid position itself, whatever its last solution was.
-    if (vp.cls == VertexClass::kFree &&
+    // rigid position itself, whatever its last solution was. So is, nearly, an adopted
+    // vertex's (its own field alone, calibrated through its skinned position), whose last
+    // solution may lie beyond its small primitive's reach.
+    if ((vp.cls == VertexClass::kFree || vp.yields_own) &&
         std::all_of(vp.cand, vp.cand + vp.ncand,
                     [](const Candidate& c) { return c.hard && !(c.bulge > 0.0f); })) {
       s_start = 0.0f;
@@ -637,6 +662,15 @@ void passSolve(DeformFrame& fr, int first, int last, DeformCounters& cnt) {
     RootResult res = solveVertex(vp, dir, s_start, g, grad, reach, opt.root, cnt, iterated);
     if (!res.found && (flags & kVertexGradient) == 0 && gn > 0.0f) {
       use_gradient();
+      res = solveVertex(vp, dir, s_start, g, grad, reach, opt.root, cnt, iterated);
+    }
+    // No common surface within reach: the partner is deeper than the vertex's own field can
+    // answer (a finger sunk whole into the hips). The vertex takes the whole contact, as a
+    // free vertex does (yieldWhole), and ends on the partner's skin.
+    if (!res.found && yieldWhole(vp)) {
+      s_start = 0.0f;
+      g = evaluate(vp, vp.p0, grad);
+      ++cnt.evaluations;
       res = solveVertex(vp, dir, s_start, g, grad, reach, opt.root, cnt, iterated);
     }
     // A contact root far beyond the rigid penetration: try the contact surface's normal.

@@ -56,11 +56,13 @@ struct VertexProblem {
                         // position's own value where the own field is faded (ownFade)
   float faded = 0.0f;   // the faded share (skinnedShare) of a limb or joint vertex
   int diff_exponent = 4;
-  glm::vec3 p0{0.0f};      // origin of the projection line (the rigid position)
-  bool p0_rigid = false;   // a free vertex's p0, its rigid position (where the candidates'
-                           // x_rigid hold)
-  glm::vec3 n0{0.0f};      // rigid normal
-  glm::vec3 anchor{0.0f};  // free vertices: their plane passes through this (rigid position)
+  glm::vec3 p0{0.0f};       // origin of the projection line (the rigid position)
+  bool p0_rigid = false;    // a free vertex's p0, its rigid position (where the candidates'
+                            // x_rigid hold)
+  bool yields_own = false;  // an adopted vertex: takes an own-body partner's whole contact
+                            // (DeformScratch::adopted)
+  glm::vec3 n0{0.0f};       // rigid normal
+  glm::vec3 anchor{0.0f};   // free vertices: their plane passes through this (rigid position)
   float width = 1.0f;
   int ncand = 0;
   bool overflow = false;  // more colliders than kMaxCandidates (the rest dropped)

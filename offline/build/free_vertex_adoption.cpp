@@ -134,17 +134,19 @@ Result<AdoptionReport> adoptFreeVertices(ImplicitModel& model, const Skeleton& s
     }
     return report;
   }
-  // Collisions: a new primitive inherits its former owner's, except with the owner and the
-  // other primitives made from the owner's vertices.
+  // Collisions within the body: a new primitive inherits its former owner's, except with the
+  // owner and the other new primitives (within its own body an adopted primitive is no one's
+  // partner: its vertices take a partner's whole contact, as they did free; see
+  // DeformScratch::adopted).
   CombinationGraph& g = model.graph;
   const std::size_t np = set.items.size();
   for (std::size_t a = np0; a < np; ++a) {
     const int oa = owner_of[a - np0];
     if (oa < 0 || !set.items[a].collides) continue;
-    for (std::size_t i = 0; i < np; ++i) {
-      if (i == a || !set.items[i].collides) continue;
-      const int oi = i < np0 ? static_cast<int>(i) : owner_of[i - np0];
-      if (oi < 0 || oi == oa || (i >= np0 && i < a)) continue;  // new pairs once
+    for (std::size_t i = 0; i < np0; ++i) {
+      if (!set.items[i].collides) continue;
+      const int oi = static_cast<int>(i);
+      if (oi == oa) continue;
       // Nor with the owner's neighbours across a joint (the upper arm for the chest, the
       // forearm for a finger): the owner meets those through the joint's blend.
       if (!g.collides(oa, oi) || g.neighbours(oa, oi)) continue;
@@ -163,7 +165,8 @@ Result<AdoptionReport> adoptFreeVertices(ImplicitModel& model, const Skeleton& s
     for (std::size_t s = 0; s < k; ++s) {
       if (skin.joints[v * k + s] == bone) own += skin.weights[v * k + s];
     }
-    c.rigid[v] = own >= 1.0f - 1e-6f ? 1 : 0;
+    // Untouched, it keeps its skinned position (as it did free): the field is for contact.
+    c.rigid[v] = own >= 1.0f - 1e-6f ? kRigidLimb : kRigidUntouched;
     c.own_weight[v] = std::clamp(own, 0.0f, 1.0f);
   }
   Result<CalibrationReport> cal =
