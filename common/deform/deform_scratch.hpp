@@ -66,6 +66,8 @@ struct DeformScratch {
   // is "<part>/<joint>"). Within its own body it is no primitive's collider, and its
   // vertices take an own-body partner's whole contact (as free vertices do): self-contact
   // stays as it was before adoption, at its cost; other bodies meet it as any primitive.
+  // Its vertices get no propagation bulge (a capsule fitted to a shell of skin, such as a
+  // chest, asks for bulges beyond their move bound: they were held).
   std::vector<std::uint8_t> adopted;
   std::vector<std::uint32_t> vf_offsets;  // vertex -> incident faces (nvert + 1)
   std::vector<std::uint32_t> vf_faces;

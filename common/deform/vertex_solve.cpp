@@ -189,7 +189,9 @@ void gatherOwn(const DeformFrame& fr, int v, VertexProblem& vp) {
       if (excess > 0.0f) cd.iso += vp.faded * excess;
     }
     const float pmax = std::bit_cast<float>(col.pmax_bits);
-    const bool bulges = with_bulge && (col.body != fr.self || fr.opt->self_propagation);
+    // An adopted vertex does not bulge (see DeformScratch::adopted).
+    const bool bulges =
+        with_bulge && !vp.yields_own && (col.body != fr.self || fr.opt->self_propagation);
     cd.bulge = bulges ? propagationBulge(cd.share, vp.w, amplitude, pmax) : 0.0f;
     // Without a bulge only penetration and contact count: a candidate that stays outside
     // the partner's surface near the vertex contributes nothing.
