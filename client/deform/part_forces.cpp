@@ -14,13 +14,20 @@ Result<PartForceLayout> makePartForceLayout(const AvatarModel& avatar) {
                 model.calibration.prims.size(), nvert);
   }
   PartForceLayout layout;
-  // Parts: the primitives; each vertex's owner.
-  layout.names.reserve(nprim);
-  for (const Primitive& p : model.primitives.items) layout.names.push_back(p.name);
+  // Parts: the body parts the primitives belong to (primitivePart: a finger or toe the
+  // builder adopted is part of its hand or foot), in model order; each vertex's owner's part.
+  std::vector<std::int16_t> part_of(nprim, -1);
+  for (std::size_t i = 0; i < nprim; ++i) {
+    const std::string_view part = primitivePart(model.primitives.items[i].name);
+    const auto found = std::find(layout.names.begin(), layout.names.end(), part);
+    part_of[i] = static_cast<std::int16_t>(found - layout.names.begin());
+    if (found == layout.names.end()) layout.names.emplace_back(part);
+  }
   layout.vertex_part.resize(nvert);
   for (std::size_t v = 0; v < nvert; ++v) {
     const std::int16_t p = model.calibration.prims[v][0];
-    layout.vertex_part[v] = p >= 0 && static_cast<std::size_t>(p) < nprim ? p : std::int16_t{-1};
+    layout.vertex_part[v] =
+        p >= 0 && static_cast<std::size_t>(p) < nprim ? part_of[static_cast<std::size_t>(p)] : -1;
   }
   // Vertex -> incident faces (counting, then filling).
   const std::vector<std::uint32_t>& idx = avatar.skin.indices;

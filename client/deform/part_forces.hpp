@@ -1,9 +1,10 @@
 // Contact force per body part of one deformed body (issue 25 item 10: force out), from
 // Step 3's per-vertex results (common/deform DeformState: pressure, contact partner, deformed
 // positions and normals). The body parts are the avatar's implicit primitives (head, torso,
-// l_hand, ..., as its primitive map names them); a vertex belongs to its owning primitive
-// (calibration.prims[v][0]: the limb of a limb vertex, the joint sphere of a joint vertex,
-// the carrying primitive of a free one).
+// l_hand, ..., as its primitive map names them) grouped by primitivePart, so that the fingers
+// and toes the builder adopted count with their hand and foot; a vertex belongs to the part
+// of its owning primitive (calibration.prims[v][0]: the limb of a limb vertex, the joint
+// sphere of a joint vertex, the carrying primitive of a free one).
 //
 // Per contact vertex v (touching another body; self-contact is internal and left out):
 //   f_v = -p_v * A_v * n_v,  A_v = one third of the areas of v's incident faces
@@ -31,7 +32,7 @@ namespace vistel {
 
 // The static part of one avatar, built once (allocates; O(nvert + ntri)).
 struct PartForceLayout {
-  std::vector<std::string> names;         // (npart) the primitives' names
+  std::vector<std::string> names;         // (npart) the parts' names, in model order
   std::vector<std::int16_t> vertex_part;  // (nvert) owning part, -1 none
   std::vector<std::uint32_t> vf_offsets;  // (nvert + 1) into vf_faces
   std::vector<std::uint32_t> vf_faces;    // incident faces per vertex

@@ -8,6 +8,7 @@
 #include "common/deform/inner_layers.hpp"
 #include "common/deform/posed_primitives.hpp"
 #include "offline/build/fit.hpp"
+#include "offline/build/free_vertex_adoption.hpp"
 
 namespace vistel {
 namespace {
@@ -513,6 +514,14 @@ Result<ImplicitModel> buildImplicitModel(const AvatarModel& avatar, const Primit
       calibrateModel(model, mesh.positions, mesh.normals, opt.calibration);
   if (!calib) return withContext("building implicit model", calib.error());
   report.calibration = *calib;
+  if (opt.adopt_free_vertices) {
+    progress(0.9f, "adopting free vertices");
+    Result<AdoptionReport> adopted = adoptFreeVertices(model, sk, mesh, {}, opt.calibration);
+    if (!adopted) return withContext("building implicit model", adopted.error());
+    report.adopted_primitives = adopted->primitives;
+    report.adopted_vertices = adopted->adopted;
+    if (adopted->primitives > 0) report.calibration = adopted->calibration;
+  }
   for (const Primitive& p : set.items) report.primitives.push_back(p.name);
   if (Status st = validateImplicitModel(model, sk.jointCount(), static_cast<int>(nv)); !st) {
     return withContext("building implicit model", st.error());

@@ -20,12 +20,18 @@ namespace vistel {
 
 struct BuildOptions {
   FieldCalibrationOptions calibration;
+  // Give the skin's free vertices (fingers, toes, upper chest, crown) fields of their own
+  // after calibration (adoptFreeVertices, free_vertex_adoption.hpp), so that every vertex
+  // meets a partner through a field: relative deformability and the common contact surface.
+  bool adopt_free_vertices = true;
   // Called with the fraction done (0..1) and the stage's name; may be empty.
   std::function<void(float, std::string_view)> progress;
 };
 
 struct BuildReport {
-  CalibrationReport calibration;
+  CalibrationReport calibration;        // after adoption, where it ran
+  int adopted_primitives = 0;           // primitives adoptFreeVertices added
+  int adopted_vertices = 0;             // free vertices they took
   std::vector<std::string> primitives;  // names, in model order
   std::vector<std::string> warnings;    // primitives skipped (joints missing, no vertices)
 };

@@ -18,16 +18,16 @@ namespace vistel {
 // joint (a phalanx, a toe, the upper chest, a cap over the crown): a capsule on their
 // principal segment (a sphere for a compact group), r_in their mean skeleton distance, r_out
 // past the farthest of them, material from the primitive that owned them for collisions.
-// A new primitive collides with what its former owner collides with, except the owner, the
-// owner's neighbours across a joint primitive (the owner meets those through the joint's
-// blend) and the other primitives made from the owner's vertices (a finger does not collide
-// with its hand, its forearm or the other fingers). A former owner carried by the same joint
-// keeps fitting its skin weights to the vertices it fitted before (so its skin does not
-// move). Skeletons without finger or toe bones get no such primitives (their vertices are
-// then on the hand's and foot's bones, and not free). Inner layers (inner_layers.hpp) are
-// left alone. Not yet run by the builder (build_model.hpp): with it, MakeHuman's hand pushed
-// through the hips leaves 945 vertices unsolved against 321 without, and the primitive
-// count, part grouping and deformation bounds the tests hold change; see issue 25.
+// Within the body a new primitive collides with what its former owner collides with, except
+// the owner, the owner's neighbours across a joint primitive (the owner meets those through
+// the joint's blend) and the other new primitives (a finger does not collide with its hand,
+// its forearm or any finger); and there its vertices take the partner's whole contact, as
+// they did free (DeformScratch::adopted): self-contact costs what it did. Other bodies meet it
+// as any primitive, by relative deformability (its vertices without a bulge). A former owner
+// carried by the same joint keeps fitting its skin weights to the vertices it fitted before (so its
+// skin does not move). Skeletons without finger or toe bones get no such primitives (their vertices
+// are then on the hand's and foot's bones, and not free). Inner layers (inner_layers.hpp) are left
+// alone. The builder runs it after calibration (BuildOptions::adopt_free_vertices).
 struct AdoptionOptions {
   int min_vertices = 4;            // free vertices a joint needs for a primitive of its own
   float max_surface_ratio = 0.7f;  // r_in / r_out at most this
@@ -47,9 +47,12 @@ struct AdoptionReport {
 // counts the classes only), so a second call changes nothing.
 // Primitives are named "<former owner>/<joint>" (e.g. "l_hand/index_01_l", "torso/spine_03";
 // the joint's name alone when the vertices had no owner; suffixed with '+' where taken), so
-// that primitivePart groups them with their body part. Calibration::rigid and
-// own_weight are set for the adopted vertices: the share of their skin weight on their
-// primitive's bone. Fails on mismatched sizes or when the set would exceed kMaxPrimitives.
+// that primitivePart groups them with their body part. For the adopted vertices,
+// Calibration::own_weight is the share of their skin weight on their primitive's bone, and
+// Calibration::rigid is kRigidLimb where that is all of it, else kRigidUntouched: untouched,
+// an adopted vertex keeps its skinned position, as it did free (its field is for contact;
+// solving every adopted vertex every frame cost bench_deform's Steps 1-3 about a tenth more).
+// Fails on mismatched sizes or when the set would exceed kMaxPrimitives.
 // Cost: offline; one more calibration.
 Result<AdoptionReport> adoptFreeVertices(ImplicitModel& model, const Skeleton& skeleton,
                                          const SkinMesh& skin, const AdoptionOptions& options = {},

@@ -110,6 +110,7 @@ struct BuildCommandOptions {
   std::string out;
   std::string primitives = "config/avatars/humanoid.toml";
   std::string config = "config";
+  bool keep_free = false;  // --keep-free: no primitives for the free vertices
 };
 
 Status runBuild(const BuildCommandOptions& opt) {
@@ -134,7 +135,7 @@ Status runBuild(const BuildCommandOptions& opt) {
       [&progress](float f, std::string_view stage) {
         if (stage != "done") progress.update(0.1f + 0.75f * f, stage);
       },
-      &report);
+      &report, !opt.keep_free);
   if (!built) return built;
 
   // Textures downscaled when the avatar would exceed the server's avatar size limit.
@@ -165,10 +166,13 @@ Status runBuild(const BuildCommandOptions& opt) {
   const CalibrationReport& c = report.calibration;
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   fmt::print(
-      "wrote {}: {} vertices, {} joints, {} primitives; vertices: {} limb, {} joint, {} free "
-      "({} demoted), {} rest-contact pairs; {} bytes (format {}), verified on reload; {:.1f} s{}\n",
+      "wrote {}: {} vertices, {} joints, {} primitives ({} from the map, {} adopting {} free "
+      "vertices); vertices: {} limb, {} joint, {} free ({} demoted), {} rest-contact pairs; {} "
+      "bytes (format {}), verified on reload; {:.1f} s{}\n",
       opt.out, avatar->skin.vertexCount(), avatar->skeleton.jointCount(), report.primitives.size(),
-      c.limb, c.joint, c.free, c.demoted, c.rest_pairs, bytes.size(), kAvatarFormatVersion, seconds,
+      report.primitives.size() - static_cast<std::size_t>(report.adopted_primitives),
+      report.adopted_primitives, report.adopted_vertices, c.limb, c.joint, c.free, c.demoted,
+      c.rest_pairs, bytes.size(), kAvatarFormatVersion, seconds,
       rebuilt ? " (the input's implicit model was replaced)" : "");
   if (!avatar->look.empty()) {
     fmt::print("look: {} materials, {} textures ({} bytes), {}\n", avatar->look.materials.size(),
@@ -184,7 +188,7 @@ Status runBuild(const BuildCommandOptions& opt) {
 Status buildAvatarImplicit(AvatarModel& avatar, const std::string& primitives,
                            const std::string& config,
                            std::function<void(float, std::string_view)> progress,
-                           BuildReport* report) {
+                           BuildReport* report, bool adopt_free_vertices) {
   // The joint map (the avatar's names -> canonical ones) and the primitive map.
   Result<std::vector<JointMap>> maps = loadJointMaps(config);
   if (!maps) return maps.error();
@@ -200,6 +204,7 @@ Status buildAvatarImplicit(AvatarModel& avatar, const std::string& primitives,
   if (!spec) return spec.error();
   BuildOptions options;
   options.progress = std::move(progress);
+  options.adopt_free_vertices = adopt_free_vertices;
   Result<ImplicitModel> model = buildImplicitModel(avatar, *spec, &map->map, options, report);
   if (!model)
     return withContext(fmt::format("fitting {} to '{}'", primitives, avatar.name), model.error());
@@ -221,6 +226,9 @@ void registerBuildCommand(CLI::App& app) {
   cmd->add_option("--primitives", opt->primitives, "primitive map (TOML)")->capture_default_str();
   cmd->add_option("--config", opt->config, "config folder with skeletons/*.toml joint maps")
       ->capture_default_str();
+  cmd->add_flag("--keep-free", opt->keep_free,
+                "leave the vertices no mapped primitive models free (rigid to soft partners) "
+                "instead of giving them primitives of their own (fingers, toes, chest, crown)");
   setCommandAction(cmd, [opt]() { return runBuild(*opt); });
 }
 

@@ -37,12 +37,13 @@ void registerSynthesizeCommand(CLI::App& app);
 
 // Fits `avatar`'s implicit model (build_command.cpp; shared with deform): the joint map that
 // fits its skeleton from <config>/skeletons, the primitive map from `primitives`. progress
-// (may be empty) gets the fraction done and the stage. The avatar is validated after.
+// (may be empty) gets the fraction done and the stage. adopt_free_vertices: give the free
+// vertices primitives of their own (BuildOptions). The avatar is validated after.
 struct BuildReport;
 Status buildAvatarImplicit(AvatarModel& avatar, const std::string& primitives,
                            const std::string& config,
                            std::function<void(float, std::string_view)> progress,
-                           BuildReport* report = nullptr);
+                           BuildReport* report = nullptr, bool adopt_free_vertices = true);
 
 // Runs `body` as the subcommand's action: an Error (or an escaped exception) is printed
 // to stderr as "vistel-avatar <command>: error: <message>" and makes the program exit with

@@ -26,7 +26,7 @@ struct CollisionModel {
 // Limits a server puts on uploaded collision models, so one avatar cannot make every
 // tick expensive (Step 1 is O(m^2) in the worst case) or reach across the room.
 struct CollisionLimits {
-  int max_primitives = 64;
+  int max_primitives = 128;
   float max_extent_m = 2.0f;  // largest side of a primitive's field box in the bind pose
 };
 

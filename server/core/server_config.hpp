@@ -70,7 +70,7 @@ struct ServerConfig {
   bool limit_loopback = false;
   double control_rate_hz = 20.0;        // control messages per second per connection,
   int control_burst = 100;              // sustained, and in a burst (avatar chunks are free)
-  int max_primitives_per_avatar = 64;   // collision model limits checked at upload
+  int max_primitives_per_avatar = 128;  // collision model limits checked at upload
   float max_primitive_extent_m = 2.0f;  // largest side of a primitive's field box at rest
   // Dents (proto/SESSION.md §2.5): the most dented vertices one Dents message may carry, the
   // shortest time between two of one body from one member, and the bytes of Dents a member

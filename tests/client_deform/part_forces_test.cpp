@@ -145,12 +145,30 @@ class FakeForceDevice final : public HidOutputDevice {
   bool unplugged = false;
 };
 
-TEST(PartForceLayout, PartsAreThePrimitives) {
+TEST(PartForceLayout, PartsAreTheBodyParts) {
   ASSERT_NE(defaultAvatar(), nullptr);
   Result<PartForceLayout> layout = makePartForceLayout(*defaultAvatar());
   ASSERT_TRUE(layout.ok()) << layout.error().message;
-  EXPECT_EQ(layout->partCount(),
-            static_cast<int>(defaultAvatar()->implicit->primitives.items.size()));
+  // One part per primitive of the map; the adopted ones ("l_hand/l_index1") join their part.
+  const ImplicitModel& model = *defaultAvatar()->implicit;
+  int own = 0, adopted_vertices = 0;
+  for (std::size_t i = 0; i < model.primitives.items.size(); ++i) {
+    const std::string& name = model.primitives.items[i].name;
+    if (primitivePart(name) == name) {
+      ++own;
+      continue;
+    }
+    const int part = findPart(*layout, primitivePart(name));
+    ASSERT_GE(part, 0) << name;
+    EXPECT_EQ(findPart(*layout, name), -1) << name;
+    for (std::size_t v = 0; v < model.calibration.prims.size(); ++v) {
+      if (model.calibration.prims[v][0] != static_cast<std::int16_t>(i)) continue;
+      EXPECT_EQ(layout->vertex_part[v], part) << name << " vertex " << v;
+      ++adopted_vertices;
+    }
+  }
+  EXPECT_EQ(layout->partCount(), own);
+  EXPECT_GT(adopted_vertices, 100) << "fingers, toes and chest adopted by the builder";
   for (const char* part : {"head", "torso", "pelvis", "l_hand", "r_hand", "l_foot"}) {
     EXPECT_GE(findPart(*layout, part), 0) << part;
   }

@@ -165,9 +165,12 @@ const RealAvatar* realAvatar(const std::string& which) {
   auto& slot = cache[which];
   if (slot) return slot.get();
   auto a = std::make_unique<RealAvatar>();
+  // "<avatar>:free": built with its free vertices left free (BuildOptions).
+  const bool keep_free = which.ends_with(":free");
+  const std::string base = keep_free ? which.substr(0, which.size() - 5) : which;
   Result<AvatarModel> avatar =
-      which == "makehuman" ? importGltfAvatar(sharedDataPath("avatars/makehuman_game_engine.glb"))
-                           : makeDefaultAvatar();
+      base == "makehuman" ? importGltfAvatar(sharedDataPath("avatars/makehuman_game_engine.glb"))
+                          : makeDefaultAvatar();
   if (!avatar) {
     ADD_FAILURE() << which << ": " << avatar.error().message;
     return nullptr;
@@ -190,7 +193,9 @@ const RealAvatar* realAvatar(const std::string& which) {
     ADD_FAILURE() << spec.error().message;
     return nullptr;
   }
-  Result<ImplicitModel> model = buildImplicitModel(a->avatar, *spec, a->map, {}, &a->report);
+  BuildOptions options;
+  options.adopt_free_vertices = !keep_free;
+  Result<ImplicitModel> model = buildImplicitModel(a->avatar, *spec, a->map, options, &a->report);
   if (!model) {
     ADD_FAILURE() << which << ": " << model.error().message;
     return nullptr;

@@ -80,6 +80,8 @@ struct RealAvatar {
   ImplicitModel model;
   BuildReport report;
 };
+// With ":free" appended ("makehuman:free"), the model is built with its free vertices left
+// free (BuildOptions::adopt_free_vertices off), as builds before adoption.
 const RealAvatar* realAvatar(const std::string& which);
 
 // A scene body of a real avatar (a copy of its cached model), in the rest posture.

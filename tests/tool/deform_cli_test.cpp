@@ -147,6 +147,16 @@ TEST(DeformCli, BuildTheDefaultAvatarAndLoadItBackBitIdentical) {
   EXPECT_NE(run.out.find("replaced"), std::string::npos) << run.out;
   EXPECT_EQ(bytesOf(dir + "/again.vavatar"), bytesOf(out));
 
+  // The free vertices get primitives of their own unless --keep-free says not to.
+  EXPECT_EQ(run.out.find(" 0 adopting"), std::string::npos) << run.out;
+  run = test::runTool("build " + out + " --keep-free -o " + dir + "/free.vavatar", dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find(" 0 adopting 0 free vertices"), std::string::npos) << run.out;
+  Result<AvatarModel> kept_free = loadAvatar(dir + "/free.vavatar");
+  ASSERT_TRUE(kept_free.ok()) << kept_free.error().message;
+  EXPECT_LT(kept_free->implicit->primitives.items.size(),
+            loaded->implicit->primitives.items.size());
+
   // A damaged file is refused on load with a clear error.
   std::vector<std::uint8_t> bytes = bytesOf(out);
   bytes[bytes.size() / 2] ^= 0x5a;
