@@ -8,10 +8,17 @@
 namespace vistel {
 namespace {
 
-bool lessPair(const Interaction& x, const Interaction& y) {
-  return std::tie(x.body_a, x.prim_a, x.body_b, x.prim_b) <
-         std::tie(y.body_a, y.prim_a, y.body_b, y.prim_b);
+// The order of pairs: (body_a, prim_a, body_b, prim_b), as one 64-bit key (a function object,
+// so that std::sort inlines it).
+std::uint64_t pairKey(const Interaction& p) {
+  return (std::uint64_t{p.body_a} << 48) | (std::uint64_t{p.prim_a} << 32) |
+         (std::uint64_t{p.body_b} << 16) | std::uint64_t{p.prim_b};
 }
+struct LessPair {
+  bool operator()(const Interaction& x, const Interaction& y) const {
+    return pairKey(x) < pairKey(y);
+  }
+};
 
 Interaction ordered(Interaction p) {
   if (std::tie(p.body_b, p.prim_b) < std::tie(p.body_a, p.prim_a)) {
@@ -57,7 +64,10 @@ bool boundsOverlap(const PosedPrimitive& p, const PosedPrimitive& q) {
 void finalizeInteractions(InteractionList& list, int body_count) {
   // Canonical order of the undirected pairs.
   for (Interaction& p : list.pairs) p = ordered(p);
-  std::sort(list.pairs.begin(), list.pairs.end(), lessPair);
+  // Each body's own pairs come in its graph's order, already sorted: most lists need no sort.
+  if (!std::is_sorted(list.pairs.begin(), list.pairs.end(), LessPair{})) {
+    std::sort(list.pairs.begin(), list.pairs.end(), LessPair{});
+  }
   list.pairs.erase(std::unique(list.pairs.begin(), list.pairs.end()), list.pairs.end());
   // Both directions, sorted, with per-body offsets.
   list.directed.clear();
@@ -65,7 +75,7 @@ void finalizeInteractions(InteractionList& list, int body_count) {
     list.directed.push_back(p);
     list.directed.push_back(Interaction{p.body_b, p.prim_b, p.body_a, p.prim_a});
   }
-  std::sort(list.directed.begin(), list.directed.end(), lessPair);
+  std::sort(list.directed.begin(), list.directed.end(), LessPair{});
   list.body_offsets.assign(static_cast<std::size_t>(body_count) + 1, 0);
   for (const Interaction& d : list.directed) {
     if (d.body_a < body_count) ++list.body_offsets[static_cast<std::size_t>(d.body_a) + 1];
