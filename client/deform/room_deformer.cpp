@@ -162,6 +162,7 @@ Status RoomDeformer::rebuild(std::span<const MemberView> views, RoomView& view) 
   }
   body_positions_.assign(nbody, glm::vec3(0.0f));
   in_contact_.assign(nbody, 0);
+  deforms_now_.assign(nbody, 0);
   tiers_.assign(nbody, DeformTier::kFull);
   previous_tiers_.reserve(nbody);
   keys_ = wanted_;
@@ -236,9 +237,9 @@ Status RoomDeformer::prepare(double time, const InteractionList* received) {
   shared_->deform_ns.store(0, std::memory_order_relaxed);
   if (!shared_->scene) return {};
   DeformScene& scene = *shared_->scene;
-  Status status = scene.prepare(time, received);
+  // Step 1 between bodies now; each body's own pairs once its tier says it deforms.
+  Status status = scene.prepare(time, received, /*self_contact=*/false);
   stats_.pose_ms = scene.timings().pose_ms;
-  stats_.step1_ms = scene.timings().step1_ms;
 
   // Level of detail: who touches another body this frame (Step 1's pairs), where each
   // body stands, then every body's tier and what its hook does.
@@ -287,6 +288,13 @@ Status RoomDeformer::prepare(double time, const InteractionList* received) {
         break;
     }
   }
+  for (int i = 0; i < n; ++i) {
+    const Action a = shared_->action[static_cast<std::size_t>(i)];
+    deforms_now_[static_cast<std::size_t>(i)] =
+        a == Action::kDeform || a == Action::kDeformAndHold ? 1 : 0;
+  }
+  scene.addSelfInteractions(deforms_now_);
+  stats_.step1_ms = scene.timings().step1_ms;
   previous_tiers_.assign(tiers_.begin(), tiers_.end());
   ++frame_;
   stats_.prepare_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();

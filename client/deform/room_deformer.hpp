@@ -181,6 +181,7 @@ class RoomDeformer {
   DeformLodScratch lod_scratch_;
   std::vector<glm::vec3> body_positions_;   // (nbody) room space
   std::vector<std::uint8_t> in_contact_;    // (nbody)
+  std::vector<std::uint8_t> deforms_now_;   // (nbody) its Steps 2-3 run this frame
   std::vector<DeformTier> tiers_;           // (nbody) this frame
   std::vector<DeformTier> previous_tiers_;  // (nbody) last frame (empty after a rebuild)
   DeformFrameStats stats_;

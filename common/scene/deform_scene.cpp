@@ -102,7 +102,8 @@ struct DeformScene::Impl {
   double time = 0.0;
 
   void poseBody(SceneSlot& b);
-  Status interactionsFor(const InteractionList* received);
+  Status interactionsFor(const InteractionList* received, bool self_contact);
+  bool self_pending = false;  // the list was built without the bodies' own pairs
   void deformWorld(int index, TaskPool* task_pool);
   void summarize();
 };
@@ -127,8 +128,9 @@ void DeformScene::Impl::poseBody(SceneSlot& b) {
 }
 
 // Step 1: the received list when valid, else the scene's own.
-Status DeformScene::Impl::interactionsFor(const InteractionList* received) {
+Status DeformScene::Impl::interactionsFor(const InteractionList* received, bool self_contact) {
   const int n = static_cast<int>(bodies.size());
+  self_pending = false;
   if (received != nullptr) {
     list.pairs.assign(received->pairs.begin(), received->pairs.end());
     Status valid = validateInteractions(list, views);
@@ -136,10 +138,12 @@ Status DeformScene::Impl::interactionsFor(const InteractionList* received) {
       finalizeInteractions(list, n);
       return {};
     }
-    buildInteractions(views, scratch, list);
+    buildInteractions(views, scratch, list, self_contact);
+    self_pending = !self_contact;
     return withContext("received interaction list (replaced by the local Step 1)", valid.error());
   }
-  buildInteractions(views, scratch, list);
+  buildInteractions(views, scratch, list, self_contact);
+  self_pending = !self_contact;
   return {};
 }
 
@@ -286,7 +290,7 @@ void DeformScene::setMotion(int index, const glm::vec3& velocity, float restitut
   v.restitution = restitution >= 0.0f && restitution <= 1.0f ? restitution : 1.0f;
 }
 
-Status DeformScene::prepare(double time, const InteractionList* received) {
+Status DeformScene::prepare(double time, const InteractionList* received, bool self_contact) {
   Impl& s = *impl_;
   s.time = time;
   s.postures_at_rest = 0;
@@ -302,14 +306,30 @@ Status DeformScene::prepare(double time, const InteractionList* received) {
   s.timings.deform_ms = 0.0;
   // Step 1.
   Status status;
+  s.self_pending = false;
   if (s.options.rigid_only) {
     s.list.pairs.clear();
     finalizeInteractions(s.list, bodyCount());
   } else {
-    status = s.interactionsFor(received);
+    status = s.interactionsFor(received, self_contact);
   }
   s.timings.step1_ms = msSince(t1);
   return status;
+}
+
+void DeformScene::addSelfInteractions(std::span<const std::uint8_t> deforms) {
+  Impl& s = *impl_;
+  if (!s.self_pending) return;
+  s.self_pending = false;
+  const Clock::time_point t0 = Clock::now();
+  const std::size_t before = s.list.pairs.size();
+  for (std::size_t i = 0; i < s.bodies.size() && i < deforms.size(); ++i) {
+    if (deforms[i] == 0 || s.views[i].graph == nullptr) continue;
+    appendSelfInteractions(*s.views[i].graph, *s.views[i].posed, static_cast<std::uint16_t>(i),
+                           s.list.pairs);
+  }
+  if (s.list.pairs.size() != before) finalizeInteractions(s.list, bodyCount());
+  s.timings.step1_ms += msSince(t0);
 }
 
 bool DeformScene::matchesPrepared(int index, std::span<const glm::mat4> skin,

@@ -37,6 +37,35 @@ DeformScene scene(int threads, float depth) {
   return std::move(*s);
 }
 
+// Step 1 in two parts (what a room does): the pairs between bodies first, then the own pairs
+// of the bodies that deform this frame; the same list as one Step 1 for those bodies, and no
+// own pairs for the others.
+TEST(DeformSceneDefaultAvatar, OwnPairsOnlyForTheBodiesThatDeform) {
+  ASSERT_NE(defaultAvatar(), nullptr);
+  DeformScene whole = scene(1, 0.015f);
+  DeformScene split = scene(1, 0.015f);
+  ASSERT_TRUE(whole.prepare(0.0).ok());
+  const auto own = [](const InteractionList& list, int body) {
+    return std::count_if(list.pairs.begin(), list.pairs.end(), [body](const Interaction& p) {
+      return p.body_a == body && p.body_b == body;
+    });
+  };
+  ASSERT_GT(own(whole.interactions(), 0), 0) << "the avatar's own pairs at rest";
+  ASSERT_TRUE(split.prepare(0.0, nullptr, false).ok());
+  EXPECT_EQ(own(split.interactions(), 0), 0);
+  const std::vector<std::uint8_t> none = {0, 0};
+  split.addSelfInteractions(none);
+  EXPECT_EQ(own(split.interactions(), 0), 0);
+  ASSERT_TRUE(split.prepare(0.0, nullptr, false).ok());
+  const std::vector<std::uint8_t> avatar = {1, 0};
+  split.addSelfInteractions(avatar);
+  EXPECT_EQ(split.interactions().pairs, whole.interactions().pairs);
+  EXPECT_EQ(split.interactions().directed, whole.interactions().directed);
+  // A second call adds nothing.
+  split.addSelfInteractions(avatar);
+  EXPECT_EQ(split.interactions().pairs, whole.interactions().pairs);
+}
+
 TEST(DeformSceneDefaultAvatar, BallInTheChest) {
   ASSERT_NE(defaultAvatar(), nullptr);
   ASSERT_GE(defaultAvatar()->skeleton.find("chest"), 0);
