@@ -20,7 +20,9 @@ bool ServerInteractions::map(const net::ClientSession& session, const RoomDeform
   };
   for (const auto& m : session.members()) add(m->id);
   for (const auto& p : session.props()) add(net::propViewId(p->id));
-  if (Status st = session.sceneInteractions(bodies_, session_list_); !st) {
+  // Each body's own pairs are left to the deformer, which adds them for the bodies it
+  // deforms this frame (RoomDeformer::prepare).
+  if (Status st = session.sceneInteractions(bodies_, session_list_, nullptr, false); !st) {
     ++refused_;
     if (version != last_refused_version_) {
       last_refused_version_ = version;

@@ -778,7 +778,7 @@ int ClientSession::sceneIndex(const ServerBodyPrim& body) const {
 }
 
 Status ClientSession::sceneInteractions(std::span<const BodyView> bodies, InteractionList& out,
-                                        int* dropped) const {
+                                        int* dropped, bool own_pairs) const {
   // Server ids -> scene indices; pairs with a body the caller does not have are left out.
   out.pairs.clear();
   int left_out = 0;
@@ -799,7 +799,7 @@ Status ClientSession::sceneInteractions(std::span<const BodyView> bodies, Intera
   if (dropped != nullptr) *dropped = left_out;
   // Self-contact the server left out: each posed body's own, from the poses given here
   // (the ones drawn).
-  if (interactions_.self_omitted) {
+  if (interactions_.self_omitted && own_pairs) {
     for (std::size_t b = 0; b < bodies.size(); ++b) {
       const BodyView& body = bodies[b];
       if (body.posed == nullptr || body.graph == nullptr) continue;

@@ -281,9 +281,11 @@ class ClientSession {
   // bodies.size() bodies and checked with validateInteractions. On a failed check (a
   // primitive the body does not have, a pair its graph forbids: the caller's avatar is not
   // the server's) `out` is left empty and the error names the pair. Allocation-free once
-  // `out` has grown.
+  // `out` has grown. Where the server left each body's own pairs out, they are added from
+  // `bodies`' poses, unless own_pairs is false (a caller that adds them itself, for the
+  // bodies it deforms: DeformScene::addSelfInteractions).
   Status sceneInteractions(std::span<const BodyView> bodies, InteractionList& out,
-                           int* dropped = nullptr) const;
+                           int* dropped = nullptr, bool own_pairs = true) const;
   // Increments whenever the roster changes (for callers that rebuild views).
   std::uint64_t rosterVersion() const { return roster_version_; }
 

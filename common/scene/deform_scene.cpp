@@ -136,6 +136,7 @@ Status DeformScene::Impl::interactionsFor(const InteractionList* received, bool 
     Status valid = validateInteractions(list, views);
     if (valid) {
       finalizeInteractions(list, n);
+      self_pending = !self_contact;
       return {};
     }
     buildInteractions(views, scratch, list, self_contact);

@@ -132,13 +132,15 @@ class DeformScene {
 
   // Split frame, part 1 (one thread): postures -> joints, skinning matrices, posed
   // primitives, Step 1 (`received` as in step()). Marks every body not yet deformed.
-  // self_contact = false leaves each body's own pairs out of a list the scene builds, for
-  // addSelfInteractions to add for the bodies that deform this frame.
+  // self_contact = false leaves each body's own pairs out of a list the scene builds (and
+  // out of a received one that lacks them), for addSelfInteractions to add for the bodies
+  // that deform this frame.
   Status prepare(double time, const InteractionList* received = nullptr, bool self_contact = true);
   // After prepare(..., false): adds the own pairs of the bodies whose `deforms` entry is
-  // non-zero (nbody entries; a body left out has none this frame) to a list the scene built,
-  // so that a room pays self-contact only for the bodies it deforms. A received list is left
-  // as the server sent it. Counted in timings().step1_ms. O(those bodies' collide pairs).
+  // non-zero (nbody entries; a body left out has none this frame) to this frame's list, so
+  // that a room pays self-contact only for the bodies it deforms (own pairs a received list
+  // already has are merged, not doubled). Counted in timings().step1_ms. O(those bodies'
+  // collide pairs).
   void addSelfInteractions(std::span<const std::uint8_t> deforms);
   // Whether a renderer's skinning of body `index` used what prepare() posed: the same
   // skinning matrices (bind -> posed model space, njoint) and placement, bit for bit.

@@ -64,6 +64,19 @@ TEST(DeformSceneDefaultAvatar, OwnPairsOnlyForTheBodiesThatDeform) {
   // A second call adds nothing.
   split.addSelfInteractions(avatar);
   EXPECT_EQ(split.interactions().pairs, whole.interactions().pairs);
+  // A server's list without the own pairs (its default) gets them the same way; one with
+  // them keeps them once.
+  InteractionList received;
+  for (const Interaction& p : whole.interactions().pairs) {
+    if (p.body_a != p.body_b) received.pairs.push_back(p);
+  }
+  ASSERT_FALSE(received.pairs.empty()) << "the ball touches the chest";
+  ASSERT_TRUE(split.prepare(0.0, &received, false).ok());
+  split.addSelfInteractions(avatar);
+  EXPECT_EQ(split.interactions().pairs, whole.interactions().pairs);
+  ASSERT_TRUE(split.prepare(0.0, &whole.interactions(), false).ok());
+  split.addSelfInteractions(avatar);
+  EXPECT_EQ(split.interactions().pairs, whole.interactions().pairs);
 }
 
 TEST(DeformSceneDefaultAvatar, BallInTheChest) {
