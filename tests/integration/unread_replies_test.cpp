@@ -75,7 +75,7 @@ TEST(UnreadReplies, APeerThatNeverReadsIsDroppedAtItsLimit) {
   const auto answer = test::receiveControl(polite, 5);
   ::close(polite);
   ASSERT_TRUE(answer.has_value());
-  EXPECT_TRUE(answer->has_welcome());
+  EXPECT_TRUE(answer->has_welcome()) << answer->ShortDebugString() << "\n" << server.log();
   server.signal(SIGINT);
   EXPECT_EQ(server.wait(10.0), 0);
 }
