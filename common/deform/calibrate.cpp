@@ -44,7 +44,8 @@ namespace {
 // offline/build/free_vertex_adoption.hpp), so its skin stays where it was.
 void fitSkinWeightsWith(ImplicitModel& model, std::span<const glm::vec3> pos,
                         std::span<const std::uint8_t> demoted,
-                        std::span<const std::int16_t> also_fits, int samples) {
+                        std::span<const std::int16_t> also_fits, int samples,
+                        std::span<const std::uint8_t> keep_grids = {}) {
   const Calibration& c = model.calibration;
   std::vector<std::uint32_t> own;
   std::vector<float> target;  // (own) the weight each own vertex asks for
@@ -52,6 +53,7 @@ void fitSkinWeightsWith(ImplicitModel& model, std::span<const glm::vec3> pos,
   for (std::size_t i = 0; i < model.primitives.items.size(); ++i) {
     Primitive& p = model.primitives.items[i];
     SkinWeightGrid& g = p.skin_weight;
+    if (i < keep_grids.size() && keep_grids[i] != 0) continue;
     g = SkinWeightGrid{};
     // The vertices the primitive defines (limb and joint vertices, and those demoted for a
     // weak field at rest, which still move with it), each with the weight that puts this
@@ -235,7 +237,8 @@ namespace {
 Result<CalibrationReport> calibrateWith(ImplicitModel& model, std::span<const glm::vec3> pos,
                                         std::span<const glm::vec3> nrm,
                                         const FieldCalibrationOptions& opt,
-                                        std::span<const std::int16_t> also_fits) {
+                                        std::span<const std::int16_t> also_fits,
+                                        std::span<const std::uint8_t> keep_grids) {
   Calibration& c = model.calibration;
   const PrimitiveSet& set = model.primitives;
   const std::size_t nv = pos.size();
@@ -304,7 +307,7 @@ Result<CalibrationReport> calibrateWith(ImplicitModel& model, std::span<const gl
   }
   // The skins' weights around their primitives, then the rest contacts measured against
   // them (a partner meets a primitive's skin where w_i F_i = T).
-  fitSkinWeightsWith(model, pos, demoted, also_fits, 16);
+  fitSkinWeightsWith(model, pos, demoted, also_fits, 16, keep_grids);
   for (std::size_t i = 0; i < np; ++i) rest.items[i] = posePrimitive(set.items[i], glm::mat4(1.0f));
   for (std::size_t v = 0; v < nv; ++v) {
     const auto& pr = c.prims[v];
@@ -357,8 +360,9 @@ Result<CalibrationReport> calibrateWith(ImplicitModel& model, std::span<const gl
 Result<CalibrationReport> calibrateModel(ImplicitModel& model, std::span<const glm::vec3> pos,
                                          std::span<const glm::vec3> nrm,
                                          const FieldCalibrationOptions& opt,
-                                         std::span<const std::int16_t> also_fits) {
-  return calibrateWith(model, pos, nrm, opt, also_fits);
+                                         std::span<const std::int16_t> also_fits,
+                                         std::span<const std::uint8_t> keep_grids) {
+  return calibrateWith(model, pos, nrm, opt, also_fits, keep_grids);
 }
 
 void computeRelaxationWeights(std::span<const glm::vec3> pos, std::span<const glm::vec3> nrm,

@@ -42,11 +42,15 @@ struct CalibrationReport {
 // vertex as well as to those it defines (see fitSkinWeights; -1: none): the vertices given a
 // primitive of their own by adoptFreeVertices (offline/build/free_vertex_adoption.hpp),
 // which their former owner fitted, so that its skin stays where it was.
+// keep_grids (nprim, or empty): primitives whose skin weight grid is kept as it is, not
+// fitted again: a recalibration's caller that knows their fitted vertices did not change
+// (the fit is deterministic, so the grid would come out the same).
 Result<CalibrationReport> calibrateModel(ImplicitModel& model,
                                          std::span<const glm::vec3> rest_positions,
                                          std::span<const glm::vec3> rest_normals,
                                          const FieldCalibrationOptions& options = {},
-                                         std::span<const std::int16_t> also_fits = {});
+                                         std::span<const std::int16_t> also_fits = {},
+                                         std::span<const std::uint8_t> keep_grids = {});
 
 // Fits every primitive's skin weight grid (Primitive::skin_weight) so that its skin
 // w_i F_i = T passes through, or just outside, the vertices it defines (limb and joint

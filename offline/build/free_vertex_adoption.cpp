@@ -68,6 +68,10 @@ Result<AdoptionReport> adoptFreeVertices(ImplicitModel& model, const Skeleton& s
     if (heaviest[v] >= 0) groups[heaviest[v]].push_back(static_cast<std::uint32_t>(v));
   }
   std::vector<std::int16_t> also_fits(nv, kNoPrimitive);
+  // The map's primitives whose skin weight grids stay (fitted again they would come out the
+  // same): all but the former owners of adopted vertices, whose fitted vertices change (a
+  // free vertex is fitted only when demoted, which is not known here).
+  std::vector<std::uint8_t> keep_grids(np0, 1);
   std::vector<int> owner_of;  // per new primitive: the primitive its vertices had as owner
   std::vector<glm::vec3> pts;
   for (const auto& [joint, members] : groups) {
@@ -119,6 +123,7 @@ Result<AdoptionReport> adoptFreeVertices(ImplicitModel& model, const Skeleton& s
     for (const std::uint32_t v : members) {
       const std::int16_t was = c.prims[v][0];
       if (was >= 0 && set.items[static_cast<std::size_t>(was)].bone == joint) also_fits[v] = was;
+      if (was >= 0) keep_grids[static_cast<std::size_t>(was)] = 0;
       c.vertex_class[v] = VertexClass::kLimb;
       c.prims[v] = {qi, kNoPrimitive, kNoPrimitive, kNoPrimitive};
     }
@@ -170,7 +175,7 @@ Result<AdoptionReport> adoptFreeVertices(ImplicitModel& model, const Skeleton& s
     c.own_weight[v] = std::clamp(own, 0.0f, 1.0f);
   }
   Result<CalibrationReport> cal =
-      calibrateModel(model, skin.positions, skin.normals, calibration, also_fits);
+      calibrateModel(model, skin.positions, skin.normals, calibration, also_fits, keep_grids);
   if (!cal) return withContext("adopting free vertices", cal.error());
   report.calibration = *cal;
   return report;
