@@ -287,11 +287,7 @@ Status RoomDeformer::prepare(double time, const InteractionList* received) {
         ++stats_.rigid;
         break;
     }
-  }
-  for (int i = 0; i < n; ++i) {
-    const Action a = shared_->action[static_cast<std::size_t>(i)];
-    deforms_now_[static_cast<std::size_t>(i)] =
-        a == Action::kDeform || a == Action::kDeformAndHold ? 1 : 0;
+    deforms_now_[b] = action == Action::kDeform || action == Action::kDeformAndHold ? 1 : 0;
   }
   scene.addSelfInteractions(deforms_now_);
   stats_.step1_ms = scene.timings().step1_ms;
